@@ -1,0 +1,20 @@
+//! The `whitted` binary: checks the CPU, calls [`whitted::cli::run`], maps errors to exit code 2.
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    if !whitted::cpu_supported() {
+        eprintln!(
+            "error: this build of whitted needs a CPU with AVX2 and FMA (x86-64-v3); \
+             rebuild without `-C target-cpu=x86-64-v3` in .cargo/config.toml to run here"
+        );
+        return ExitCode::from(2);
+    }
+    match whitted::cli::run(std::env::args_os().collect()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! Scalar maths shared by every stage: glam's `Vec3`/`Mat4` re-exported, the single [`Ray`], and
+//! the optics of the Whitted model (mirror reflection, Snell refraction, Schlick's Fresnel term).
+//! Both tracers call these functions, so a disagreement between them never comes from the optics.
+
+pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+
+/// One ray: `origin + t * dir`. Directions are not required to be unit length (object-space rays
+/// under a scaling transform are not), but every world-space ray the tracers create is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+impl Ray {
+    /// A ray from `origin` along `dir`.
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Ray {
+        Ray { origin, dir }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// Mirror direction of `dir` about the normal `n` (unit): `R = V - 2 (V.N) N`. The sign of `n`
+/// does not matter.
+#[inline]
+pub fn reflect(dir: Vec3, n: Vec3) -> Vec3 {
+    dir - n * (2.0 * dir.dot(n))
+}
+
+/// Snell's law. `n` is the unit normal on the side the ray arrives from (`dir . n < 0`), `eta` is
+/// `index_incident / index_transmitted`. Returns the normalised transmitted direction, or `None`
+/// past the critical angle (total internal reflection).
+#[inline]
+pub fn refract(dir: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
+    let i = -dir.normalize();
+    let cos_i = n.dot(i);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if k < 0.0 {
+        return None;
+    }
+    Some((n * (eta * cos_i - k.sqrt()) - i * eta).normalize())
+}
+
+/// Schlick's approximation of the Fresnel reflectance for light going from index `n_i` into
+/// index `n_t`, where `cos_i` is the cosine of the angle of incidence. When leaving a denser
+/// medium the cosine of the transmitted angle is used, as the approximation requires; past the
+/// critical angle the reflectance is 1.
+#[inline]
+pub fn schlick(cos_i: f32, n_i: f32, n_t: f32) -> f32 {
+    let r0 = ((n_i - n_t) / (n_i + n_t)).powi(2);
+    let cos = if n_i > n_t {
+        let eta = n_i / n_t;
+        let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+        if sin2_t >= 1.0 {
+            return 1.0;
+        }
+        (1.0 - sin2_t).sqrt()
+    } else {
+        cos_i
+    };
+    r0 + (1.0 - r0) * (1.0 - cos.clamp(0.0, 1.0)).powi(5)
+}
+
+/// Transforms a normal by the inverse transpose `normal_matrix` and normalises it.
+#[inline]
+pub fn transform_normal(normal_matrix: &Mat3, n: Vec3) -> Vec3 {
+    (*normal_matrix * n).normalize()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn reflection_mirrors_about_the_normal_either_sign() {
+        let d = Vec3::new(1.0, -1.0, 0.0).normalize();
+        let r = Vec3::new(1.0, 1.0, 0.0).normalize();
+        assert!(close(reflect(d, Vec3::Y), r));
+        assert!(close(reflect(d, -Vec3::Y), r));
+        assert!(close(reflect(-Vec3::Y, Vec3::Y), Vec3::Y));
+    }
+
+    #[test]
+    fn refraction_obeys_snell_and_is_normalised() {
+        let theta_i = 30f32.to_radians();
+        let d = Vec3::new(theta_i.sin(), -theta_i.cos(), 0.0);
+        let t = refract(d, Vec3::Y, 1.0 / 1.5).unwrap();
+        assert!((t.length() - 1.0).abs() < 1e-6);
+        let sin_t = t.x;
+        assert!((theta_i.sin() - 1.5 * sin_t).abs() < 1e-6);
+        assert!(t.y < 0.0);
+        // Index 1: the ray goes straight on.
+        assert!(close(refract(d, Vec3::Y, 1.0).unwrap(), d));
+        // Head-on: straight through whatever the index.
+        assert!(close(
+            refract(-Vec3::Y, Vec3::Y, 1.0 / 2.0).unwrap(),
+            -Vec3::Y
+        ));
+    }
+
+    #[test]
+    fn total_internal_reflection_past_the_critical_angle() {
+        let eta = 1.5f32; // glass to vacuum
+        let critical = (1.0 / eta).asin();
+        let just_below = critical - 0.01;
+        let just_above = critical + 0.01;
+        let dir = |a: f32| Vec3::new(a.sin(), -a.cos(), 0.0);
+        let t = refract(dir(just_below), Vec3::Y, eta).expect("below critical angle");
+        assert!(t.x > 0.95, "near grazing exit: {t}");
+        assert!(refract(dir(just_above), Vec3::Y, eta).is_none());
+        assert!(refract(dir(80f32.to_radians()), Vec3::Y, eta).is_none());
+    }
+
+    #[test]
+    fn schlick_limits() {
+        // Normal incidence gives R0, grazing incidence gives 1.
+        let r0 = (0.5f32 / 2.5).powi(2);
+        assert!((schlick(1.0, 1.0, 1.5) - r0).abs() < 1e-6);
+        assert!((schlick(0.0, 1.0, 1.5) - 1.0).abs() < 1e-6);
+        // Equal indices: no reflection at normal incidence.
+        assert!(schlick(1.0, 1.3, 1.3).abs() < 1e-6);
+        // Leaving glass past the critical angle: total reflection.
+        assert_eq!(schlick(0.2, 1.5, 1.0), 1.0);
+        // Monotone in the angle.
+        assert!(schlick(0.5, 1.0, 1.5) > schlick(0.9, 1.0, 1.5));
+    }
+
+    #[test]
+    fn normals_use_the_inverse_transpose_under_non_uniform_scale() {
+        // A sphere squashed to half height: the normal at 45 degrees tilts towards Y.
+        let m = Mat4::from_scale(Vec3::new(1.0, 0.5, 1.0));
+        let normal_matrix = Mat3::from_mat4(m.inverse().transpose());
+        let n_obj = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let n = transform_normal(&normal_matrix, n_obj);
+        assert!(close(n, Vec3::new(1.0, 2.0, 0.0).normalize()));
+        // The transformed normal is perpendicular to the transformed tangent.
+        let tangent_obj = Vec3::new(-1.0, 1.0, 0.0);
+        let tangent = m.transform_vector3(tangent_obj);
+        assert!(n.dot(tangent).abs() < 1e-6);
+        // Transforming the normal like a direction would be wrong here.
+        let naive = m.transform_vector3(n_obj).normalize();
+        assert!(naive.dot(tangent).abs() > 0.1);
+    }
+}

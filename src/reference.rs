@@ -1,0 +1,284 @@
+//! The scalar reference tracer: the specification every faster path is held to. It is the
+//! lecture's algorithm and nothing clever: one ray at a time, brute force over the object tree
+//! as parsed (transforms move the ray into object space, `t` stays in world units because the
+//! direction is not renormalised, normals come back through the inverse transpose), recursion for
+//! mirror and refracted rays, one any-hit shadow ray per light.
+//!
+//! ```text
+//! trace(ray) = background                                 if nothing is hit
+//!            = 0                                          on a back face without shade_back
+//!            = ambient + sum_lights visible * phong
+//!              + reflective * trace(mirror) + transparent * trace(refracted)
+//! ```
+
+use crate::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
+use crate::math::{Ray, Vec3, transform_normal};
+use crate::raytree::{RayTree, SegmentKind};
+use crate::scene::{Object, Scene};
+use crate::shade::{self, EPSILON, Hit, ShadeOptions};
+
+/// The closest hit of `ray` with `obj` in `(tmin, tmax)`.
+pub fn closest_hit(obj: &Object, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
+    let mut best = None;
+    intersect(obj, ray, tmin, tmax, &mut best);
+    best
+}
+
+/// Updates `best` if `obj` has a hit nearer than it (and than `tmax`); true if it did.
+fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hit>) -> bool {
+    let limit = best.map_or(tmax, |h| h.t);
+    match obj {
+        Object::Sphere {
+            center,
+            radius,
+            material,
+        } => match intersect_sphere(*center, radius * radius, ray, tmin, limit) {
+            Some(t) => {
+                let normal = (ray.at(t) - *center).normalize();
+                *best = Some(Hit {
+                    t,
+                    normal,
+                    material: *material,
+                });
+                true
+            }
+            None => false,
+        },
+        Object::Plane {
+            normal,
+            offset,
+            material,
+        } => match intersect_plane(*normal, *offset, ray, tmin, limit) {
+            Some(t) => {
+                *best = Some(Hit {
+                    t,
+                    normal: *normal,
+                    material: *material,
+                });
+                true
+            }
+            None => false,
+        },
+        Object::Triangle { v, material } => {
+            intersect_one_triangle(v, *material, ray, tmin, limit, best)
+        }
+        Object::Mesh {
+            triangles,
+            material,
+        } => {
+            let mut found = false;
+            for v in triangles {
+                let limit = best.map_or(tmax, |h| h.t);
+                found |= intersect_one_triangle(v, *material, ray, tmin, limit, best);
+            }
+            found
+        }
+        Object::Group(children) => {
+            let mut found = false;
+            for child in children {
+                found |= intersect(child, ray, tmin, tmax, best);
+            }
+            found
+        }
+        Object::Transform(tr) => {
+            let local = Ray::new(
+                tr.inverse.transform_point3(ray.origin),
+                tr.inverse.transform_vector3(ray.dir),
+            );
+            let mut local_best = *best;
+            if intersect(&tr.child, &local, tmin, tmax, &mut local_best) {
+                let mut hit = local_best.expect("a hit was found");
+                hit.normal = transform_normal(&tr.normal_matrix, hit.normal);
+                *best = Some(hit);
+                true
+            } else {
+                false
+            }
+        }
+    }
+}
+
+fn intersect_one_triangle(
+    v: &[Vec3; 3],
+    material: u32,
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    best: &mut Option<Hit>,
+) -> bool {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    match intersect_triangle(v[0], e1, e2, ray, tmin, tmax) {
+        Some(t) => {
+            *best = Some(Hit {
+                t,
+                normal: e1.cross(e2).normalize(),
+                material,
+            });
+            true
+        }
+        None => false,
+    }
+}
+
+/// True if anything of `obj` lies on the ray in `(tmin, tmax)`; stops at the first such hit.
+pub fn any_hit(obj: &Object, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+    match obj {
+        Object::Sphere { center, radius, .. } => {
+            intersect_sphere(*center, radius * radius, ray, tmin, tmax).is_some()
+        }
+        Object::Plane { normal, offset, .. } => {
+            intersect_plane(*normal, *offset, ray, tmin, tmax).is_some()
+        }
+        Object::Triangle { v, .. } => {
+            intersect_triangle(v[0], v[1] - v[0], v[2] - v[0], ray, tmin, tmax).is_some()
+        }
+        Object::Mesh { triangles, .. } => triangles
+            .iter()
+            .any(|v| intersect_triangle(v[0], v[1] - v[0], v[2] - v[0], ray, tmin, tmax).is_some()),
+        Object::Group(children) => children.iter().any(|c| any_hit(c, ray, tmin, tmax)),
+        Object::Transform(tr) => {
+            let local = Ray::new(
+                tr.inverse.transform_point3(ray.origin),
+                tr.inverse.transform_vector3(ray.dir),
+            );
+            any_hit(&tr.child, &local, tmin, tmax)
+        }
+    }
+}
+
+/// How much light passes along a shadow ray: 1 if nothing is in the way; with transparent
+/// shadows, the product of the transparent colours of every surface crossed; else 0.
+fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3 {
+    if !opts.transparent_shadows {
+        return if any_hit(&scene.root, ray, EPSILON, max_t) {
+            Vec3::ZERO
+        } else {
+            Vec3::ONE
+        };
+    }
+    let mut light = Vec3::ONE;
+    let mut tmin = EPSILON;
+    while let Some(hit) = closest_hit(&scene.root, ray, tmin, max_t) {
+        let m = scene.materials[hit.material as usize]
+            .phong()
+            .expect("textures are rejected before rendering");
+        light *= m.transparent;
+        if light == Vec3::ZERO {
+            break;
+        }
+        tmin = hit.t;
+    }
+    light
+}
+
+/// The reference tracer over one scene with fixed options.
+pub struct ReferenceTracer<'s> {
+    pub scene: &'s Scene,
+    pub opts: ShadeOptions,
+}
+
+/// What a primary ray found: the pixel colour and, for the depth and normal images, the hit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimarySample {
+    pub color: Vec3,
+    pub hit: Option<Hit>,
+}
+
+impl<'s> ReferenceTracer<'s> {
+    /// A tracer for `scene`.
+    pub fn new(scene: &'s Scene, opts: ShadeOptions) -> ReferenceTracer<'s> {
+        ReferenceTracer { scene, opts }
+    }
+
+    /// Traces a primary ray, recording its tree into `tree` when given.
+    pub fn trace_primary(&self, ray: &Ray, tree: Option<&mut RayTree>) -> PrimarySample {
+        let mut tree = tree;
+        let hit = closest_hit(
+            &self.scene.root,
+            ray,
+            self.scene.camera.tmin(),
+            f32::INFINITY,
+        );
+        let color = self.shade(ray, hit, 0, 1.0, SegmentKind::Eye, None, &mut tree);
+        PrimarySample { color, hit }
+    }
+
+    /// The colour seen along `ray` (a secondary ray, starting at `EPSILON`).
+    fn trace(
+        &self,
+        ray: &Ray,
+        bounce: u32,
+        weight: f32,
+        kind: SegmentKind,
+        parent: Option<usize>,
+        tree: &mut Option<&mut RayTree>,
+    ) -> Vec3 {
+        let hit = closest_hit(&self.scene.root, ray, EPSILON, f32::INFINITY);
+        self.shade(ray, hit, bounce, weight, kind, parent, tree)
+    }
+
+    #[allow(clippy::too_many_arguments)] // reason: the recursion state of one ray, kept flat for reading
+    fn shade(
+        &self,
+        ray: &Ray,
+        hit: Option<Hit>,
+        bounce: u32,
+        weight: f32,
+        kind: SegmentKind,
+        parent: Option<usize>,
+        tree: &mut Option<&mut RayTree>,
+    ) -> Vec3 {
+        let scene = self.scene;
+        let me = tree
+            .as_deref_mut()
+            .map(|t| t.add_ray(kind, parent, ray, hit, bounce, weight));
+        let Some(hit) = hit else {
+            return scene.background;
+        };
+        let Some(s) = shade::surface(scene, ray, &hit, &self.opts) else {
+            return Vec3::ZERO;
+        };
+        let mut color = shade::ambient(scene, &s);
+        for light in &scene.lights {
+            let Some(sample) = shade::light_sample(&s, ray.dir, light, &self.opts) else {
+                continue;
+            };
+            let visible = if self.opts.shadows {
+                let v = visibility(scene, &sample.shadow, sample.max_t, &self.opts);
+                if let (Some(t), Some(me)) = (tree.as_deref_mut(), me) {
+                    t.add_shadow(me, &sample.shadow, sample.max_t, v != Vec3::ONE);
+                }
+                v
+            } else {
+                Vec3::ONE
+            };
+            color += sample.color * visible;
+        }
+        let [mirror, refracted] =
+            shade::scatter(&s, ray.dir, hit.normal, weight, bounce, &self.opts);
+        if let Some(m) = mirror {
+            color += m.color
+                * self.trace(
+                    &m.ray,
+                    bounce + 1,
+                    m.weight,
+                    SegmentKind::Reflected,
+                    me,
+                    tree,
+                );
+        }
+        if let Some(r) = refracted {
+            color += r.color
+                * self.trace(
+                    &r.ray,
+                    bounce + 1,
+                    r.weight,
+                    SegmentKind::Transmitted,
+                    me,
+                    tree,
+                );
+        }
+        color
+    }
+}

@@ -1,0 +1,978 @@
+//! The scene-file parser: text to [`Scene`]. It reads the MIT 6.837 format, whitespace-separated
+//! tokens with `{ }` blocks (braces need no spaces around them, and `#` starts a comment that
+//! runs to the end of the line):
+//!
+//! ```text
+//! OrthographicCamera { center x y z  direction x y z  up x y z  size s }
+//! PerspectiveCamera  { center x y z  direction x y z  up x y z  angle degrees }
+//! Lights { numLights n
+//!     DirectionalLight { direction x y z  color r g b }
+//!     PointLight { position x y z  color r g b  [attenuation c l q] } }
+//! Background { color r g b  [ambientLight r g b] }
+//! Materials { numMaterials n
+//!     Material { diffuseColor r g b }
+//!     PhongMaterial { [diffuseColor r g b] [specularColor r g b] [exponent e]
+//!                     [reflectiveColor r g b] [transparentColor r g b] [indexOfRefraction n] }
+//!     Checkerboard { Transform { <xform>* } materialIndex i materialIndex j }
+//!     Noise  { Transform { <xform>* } materialIndex i materialIndex j octaves k }
+//!     Marble { Transform { <xform>* } materialIndex i materialIndex j octaves k frequency f amplitude a }
+//!     Wood   { ...same as Marble... } }
+//! Group { numObjects n  ( [MaterialIndex i] <object> )*n }
+//! <object> = Sphere { center x y z  radius r }
+//!          | Plane { normal x y z  offset d }
+//!          | Triangle { vertex0 x y z  vertex1 x y z  vertex2 x y z }
+//!          | TriangleMesh { obj_file path.obj }         # relative to the scene file
+//!          | Group { ... } | Transform { <xform>* <object> }
+//! <xform>  = Translate x y z | Scale x y z | UniformScale s | XRotate deg | YRotate deg
+//!          | ZRotate deg | Rotate { ax ay az deg } | Matrix { 16 numbers, row by row }
+//! ```
+//!
+//! Top-level blocks may come in any order; fields inside camera, light, background and Phong
+//! blocks may too. Transforms compose left to right (the first listed is applied last). An
+//! object before any `MaterialIndex` gets the default material (white, diffuse). When a scene
+//! has no lights the ambient light is white, as in the course. Every error names its position:
+//! `path:line:col: expected ..., found ...`. No input makes the parser panic.
+
+use std::path::{Path, PathBuf};
+
+use super::obj;
+use super::{Camera, Light, Material, Object, Phong, Projection, Scene, Transformed};
+use crate::error::{Error, Result};
+use crate::math::{Mat4, Vec3};
+
+/// The deepest nesting of groups and transforms the parser accepts.
+pub const MAX_NESTING: usize = 256;
+
+/// Reads and parses a scene file.
+pub fn parse_file(path: &Path) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read scene", e))?;
+    let text = decode_text(&bytes, path)?;
+    parse_str(text, path)
+}
+
+/// Checks that `bytes` are UTF-8 text, naming the first offending byte's position otherwise.
+pub(crate) fn decode_text<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str> {
+    match std::str::from_utf8(bytes) {
+        Ok(text) => Ok(text),
+        Err(e) => {
+            let good = &bytes[..e.valid_up_to()];
+            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+            let line_start = good.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            let col = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
+            Err(Error::parse(
+                path,
+                line,
+                col,
+                format!(
+                    "expected UTF-8 text, found byte 0x{:02x}",
+                    bytes[e.valid_up_to()]
+                ),
+            ))
+        }
+    }
+}
+
+/// Parses scene text. `path` names the text in errors and anchors relative OBJ paths.
+pub fn parse_str(text: &str, path: &Path) -> Result<Scene> {
+    let mut p = Parser::new(text, path);
+    p.scene()
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Token<'a> {
+    text: &'a str,
+    line: usize,
+    col: usize,
+}
+
+fn tokenize<'a>(text: &'a str) -> (Vec<Token<'a>>, (usize, usize)) {
+    let mut tokens = Vec::new();
+    let (mut line, mut col) = (1, 1);
+    let mut start: Option<(usize, usize, usize)> = None; // byte offset, line, col
+    let mut in_comment = false;
+    let flush =
+        |tokens: &mut Vec<Token<'a>>, start: &mut Option<(usize, usize, usize)>, end: usize| {
+            if let Some((s, l, c)) = start.take() {
+                tokens.push(Token {
+                    text: &text[s..end],
+                    line: l,
+                    col: c,
+                });
+            }
+        };
+    for (i, ch) in text.char_indices() {
+        if in_comment {
+            if ch == '\n' {
+                in_comment = false;
+            }
+        } else if ch.is_whitespace() {
+            flush(&mut tokens, &mut start, i);
+        } else if ch == '{' || ch == '}' {
+            flush(&mut tokens, &mut start, i);
+            tokens.push(Token {
+                text: &text[i..i + 1],
+                line,
+                col,
+            });
+        } else if ch == '#' && start.is_none() {
+            in_comment = true;
+        } else if start.is_none() {
+            start = Some((i, line, col));
+        }
+        if ch == '\n' {
+            line += 1;
+            col = 1;
+        } else {
+            col += 1;
+        }
+    }
+    flush(&mut tokens, &mut start, text.len());
+    (tokens, (line, col))
+}
+
+/// How a token is shown in "found ..." messages: quoted, escaped, and cut short if long.
+fn describe(tok: Option<&Token<'_>>) -> String {
+    match tok {
+        None => "end of file".to_string(),
+        Some(t) => {
+            let mut s: String = t
+                .text
+                .chars()
+                .take(24)
+                .flat_map(char::escape_default)
+                .collect();
+            if t.text.chars().count() > 24 {
+                s.push_str("...");
+            }
+            format!("`{s}`")
+        }
+    }
+}
+
+const OBJECTS: &str = "an object (Sphere, Plane, Triangle, TriangleMesh, Group or Transform)";
+const NO_MATERIAL: u32 = u32::MAX;
+
+struct Parser<'a> {
+    path: &'a Path,
+    tokens: Vec<Token<'a>>,
+    pos: usize,
+    eof: (usize, usize),
+    current_material: u32,
+    /// Every material index used, with the token that named it, checked once all are known.
+    material_refs: Vec<(u32, Token<'a>)>,
+    depth: usize,
+}
+
+impl<'a> Parser<'a> {
+    fn new(text: &'a str, path: &'a Path) -> Parser<'a> {
+        let (tokens, eof) = tokenize(text);
+        Parser {
+            path,
+            tokens,
+            pos: 0,
+            eof,
+            current_material: NO_MATERIAL,
+            material_refs: Vec::new(),
+            depth: 0,
+        }
+    }
+
+    fn peek(&self) -> Option<Token<'a>> {
+        self.tokens.get(self.pos).copied()
+    }
+
+    fn error_at(&self, tok: Option<&Token<'_>>, msg: String) -> Error {
+        let (line, col) = tok.map_or(self.eof, |t| (t.line, t.col));
+        Error::parse(self.path, line, col, msg)
+    }
+
+    /// "expected {what}, found {the token at the cursor}".
+    fn expected(&self, what: &str) -> Error {
+        let tok = self.peek();
+        self.error_at(
+            tok.as_ref(),
+            format!("expected {what}, found {}", describe(tok.as_ref())),
+        )
+    }
+
+    fn next(&mut self, what: &str) -> Result<Token<'a>> {
+        match self.peek() {
+            Some(t) => {
+                self.pos += 1;
+                Ok(t)
+            }
+            None => Err(self.expected(what)),
+        }
+    }
+
+    fn keyword(&mut self, word: &str) -> Result<Token<'a>> {
+        match self.peek() {
+            Some(t) if t.text == word => {
+                self.pos += 1;
+                Ok(t)
+            }
+            _ => Err(self.expected(&format!("`{word}`"))),
+        }
+    }
+
+    fn number(&mut self, what: &str) -> Result<f32> {
+        let tok = self.peek();
+        match tok.map(|t| t.text.parse::<f32>()) {
+            Some(Ok(v)) if v.is_finite() => {
+                self.pos += 1;
+                Ok(v)
+            }
+            Some(Ok(_)) => Err(self.error_at(
+                tok.as_ref(),
+                format!(
+                    "expected a finite number for {what}, found {}",
+                    describe(tok.as_ref())
+                ),
+            )),
+            _ => Err(self.expected(&format!("a number for {what}"))),
+        }
+    }
+
+    fn vec3(&mut self, what: &str) -> Result<Vec3> {
+        Ok(Vec3::new(
+            self.number(what)?,
+            self.number(what)?,
+            self.number(what)?,
+        ))
+    }
+
+    /// A vector that must not be zero (directions, normals, axes).
+    fn direction(&mut self, what: &str) -> Result<Vec3> {
+        let at = self.peek();
+        let v = self.vec3(what)?;
+        let len = v.length();
+        if len > 0.0 && len.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.error_at(
+                at.as_ref(),
+                format!(
+                    "expected a non-zero vector for {what}, found ({} {} {})",
+                    v.x, v.y, v.z
+                ),
+            ))
+        }
+    }
+
+    fn positive(&mut self, what: &str) -> Result<f32> {
+        let at = self.peek();
+        let v = self.number(what)?;
+        if v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.error_at(
+                at.as_ref(),
+                format!("expected a positive number for {what}, found {v}"),
+            ))
+        }
+    }
+
+    fn count(&mut self, what: &str) -> Result<usize> {
+        let tok = self.peek();
+        match tok.map(|t| t.text.parse::<u32>()) {
+            Some(Ok(n)) => {
+                self.pos += 1;
+                Ok(n as usize)
+            }
+            _ => Err(self.expected(&format!("a whole number for {what}"))),
+        }
+    }
+
+    fn scene(&mut self) -> Result<Scene> {
+        let mut camera = None;
+        let mut lights: Option<Vec<Light>> = None;
+        let mut background = None;
+        let mut materials: Option<Vec<Material>> = None;
+        let mut root = None;
+        while let Some(tok) = self.peek() {
+            let dup = |seen: bool, p: &Self| {
+                if seen {
+                    Err(p.error_at(
+                        Some(&tok),
+                        format!("expected one `{}` block, found a second", tok.text),
+                    ))
+                } else {
+                    Ok(())
+                }
+            };
+            match tok.text {
+                "OrthographicCamera" | "PerspectiveCamera" => {
+                    if camera.is_some() {
+                        return Err(self.error_at(
+                            Some(&tok),
+                            format!("expected one camera, found a second (`{}`)", tok.text),
+                        ));
+                    }
+                    camera = Some(self.camera()?);
+                }
+                "Lights" => {
+                    dup(lights.is_some(), self)?;
+                    lights = Some(self.lights()?);
+                }
+                "Background" => {
+                    dup(background.is_some(), self)?;
+                    background = Some(self.background()?);
+                }
+                "Materials" => {
+                    dup(materials.is_some(), self)?;
+                    materials = Some(self.materials()?);
+                }
+                "Group" => {
+                    dup(root.is_some(), self)?;
+                    root = Some(self.group()?);
+                }
+                _ => {
+                    return Err(self.expected(
+                        "a top-level block (OrthographicCamera, PerspectiveCamera, Lights, \
+                         Background, Materials or Group)",
+                    ));
+                }
+            }
+        }
+        let Some(camera) = camera else {
+            return Err(self.expected("a camera (OrthographicCamera or PerspectiveCamera)"));
+        };
+        let Some(mut root) = root else {
+            return Err(self.expected("a Group of objects"));
+        };
+        let lights = lights.unwrap_or_default();
+        let (color, ambient) = background.unwrap_or((Vec3::splat(0.5), None));
+        // Course rule: with no lights the ambient light is white (flat object colours).
+        let ambient = if lights.is_empty() {
+            Vec3::ONE
+        } else {
+            ambient.unwrap_or(Vec3::ZERO)
+        };
+        let mut materials = materials.unwrap_or_default();
+        for (index, tok) in &self.material_refs {
+            if *index as usize >= materials.len() {
+                return Err(self.error_at(
+                    Some(tok),
+                    format!(
+                        "expected a material index below {} (numMaterials {}), found {index}",
+                        materials.len(),
+                        materials.len()
+                    ),
+                ));
+            }
+        }
+        if uses_material(&root, NO_MATERIAL) {
+            let default = materials.len() as u32;
+            materials.push(Material::Phong(Phong::default()));
+            set_default_material(&mut root, default);
+        }
+        Ok(Scene {
+            camera,
+            lights,
+            background: color,
+            ambient,
+            materials,
+            root,
+        })
+    }
+
+    /// Reads `{ field value ... }` with fields in any order, each at most once; `read` parses the
+    /// value of one field. Returns the names seen and the closing brace.
+    fn block_fields(
+        &mut self,
+        block: &str,
+        names: &[&'static str],
+        read: &mut dyn FnMut(&mut Self, &str) -> Result<()>,
+    ) -> Result<(Vec<&'static str>, Token<'a>)> {
+        self.keyword("{")?;
+        let mut seen: Vec<&'static str> = Vec::new();
+        loop {
+            let Some(tok) = self.peek() else {
+                return Err(self.expected(&format!("`}}` closing {block}")));
+            };
+            if tok.text == "}" {
+                self.pos += 1;
+                return Ok((seen, tok));
+            }
+            match names.iter().find(|n| **n == tok.text) {
+                Some(name) => {
+                    if seen.contains(name) {
+                        return Err(self.error_at(
+                            Some(&tok),
+                            format!("expected `{name}` once in {block}, found it twice"),
+                        ));
+                    }
+                    seen.push(name);
+                    self.pos += 1;
+                    read(self, name)?;
+                }
+                None => {
+                    let list: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+                    return Err(self.expected(&format!("{} or `}}` in {block}", list.join(", "))));
+                }
+            }
+        }
+    }
+
+    fn require(&self, block: &str, seen: &[&str], close: &Token<'_>, name: &str) -> Result<()> {
+        if seen.contains(&name) {
+            Ok(())
+        } else {
+            Err(self.error_at(
+                Some(close),
+                format!("expected `{name}` in {block}, found `}}`"),
+            ))
+        }
+    }
+
+    fn camera(&mut self) -> Result<Camera> {
+        let kind = self.next("a camera")?;
+        let block = kind.text;
+        let ortho = block == "OrthographicCamera";
+        let extra = if ortho { "size" } else { "angle" };
+        let (mut center, mut direction, mut up, mut value) =
+            (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, 0.0);
+        let mut dir_tok = None;
+        let (seen, close) = self.block_fields(
+            block,
+            &["center", "direction", "up", extra],
+            &mut |p, name| {
+                match name {
+                    "center" => center = p.vec3("center")?,
+                    "direction" => {
+                        dir_tok = p.peek();
+                        direction = p.direction("direction")?;
+                    }
+                    "up" => up = p.direction("up")?,
+                    "size" => value = p.positive("size")?,
+                    _ => {
+                        let at = p.peek();
+                        let a = p.number("angle")?;
+                        if !(a > 0.0 && a < 180.0) {
+                            return Err(p.error_at(
+                                at.as_ref(),
+                                format!("expected an angle between 0 and 180 degrees, found {a}"),
+                            ));
+                        }
+                        value = a.to_radians();
+                    }
+                }
+                Ok(())
+            },
+        )?;
+        for name in ["center", "direction", "up", extra] {
+            self.require(block, &seen, &close, name)?;
+        }
+        let cross = direction.normalize().cross(up.normalize());
+        if cross.length() < 1e-6 {
+            return Err(self.error_at(
+                dir_tok.as_ref(),
+                format!("expected `up` not parallel to `direction` in {block}, found both along ({} {} {})", direction.x, direction.y, direction.z),
+            ));
+        }
+        let projection = if ortho {
+            Projection::Orthographic { size: value }
+        } else {
+            Projection::Perspective { angle: value }
+        };
+        Ok(Camera::new(projection, center, direction, up))
+    }
+
+    fn lights(&mut self) -> Result<Vec<Light>> {
+        self.keyword("Lights")?;
+        self.keyword("{")?;
+        self.keyword("numLights")?;
+        let n = self.count("numLights")?;
+        let mut lights = Vec::new();
+        for i in 0..n {
+            let Some(tok) = self.peek() else {
+                return Err(self.expected("a light"));
+            };
+            let light = match tok.text {
+                "DirectionalLight" => self.directional_light()?,
+                "PointLight" => self.point_light()?,
+                _ => {
+                    return Err(self.expected(&format!(
+                        "a light (DirectionalLight or PointLight) for numLights {n}, after {i}"
+                    )));
+                }
+            };
+            lights.push(light);
+        }
+        if self.peek().is_some_and(|t| t.text != "}") {
+            return Err(self.expected(&format!("`}}` after {n} lights (numLights {n})")));
+        }
+        self.keyword("}")?;
+        Ok(lights)
+    }
+
+    fn directional_light(&mut self) -> Result<Light> {
+        self.pos += 1;
+        let (mut direction, mut color) = (Vec3::ZERO, Vec3::ZERO);
+        let (seen, close) = self.block_fields(
+            "DirectionalLight",
+            &["direction", "color"],
+            &mut |p, name| {
+                if name == "direction" {
+                    direction = p.direction("direction")?.normalize();
+                } else {
+                    color = p.vec3("color")?;
+                }
+                Ok(())
+            },
+        )?;
+        self.require("DirectionalLight", &seen, &close, "direction")?;
+        self.require("DirectionalLight", &seen, &close, "color")?;
+        Ok(Light::Directional { direction, color })
+    }
+
+    fn point_light(&mut self) -> Result<Light> {
+        self.pos += 1;
+        let (mut position, mut color, mut attenuation) = (Vec3::ZERO, Vec3::ZERO, [1.0, 0.0, 0.0]);
+        let (seen, close) = self.block_fields(
+            "PointLight",
+            &["position", "color", "attenuation"],
+            &mut |p, name| {
+                match name {
+                    "position" => position = p.vec3("position")?,
+                    "color" => color = p.vec3("color")?,
+                    _ => {
+                        let at = p.peek();
+                        let a = p.vec3("attenuation")?;
+                        if a.min_element() < 0.0 || a.max_element() <= 0.0 {
+                            return Err(p.error_at(
+                                at.as_ref(),
+                                format!("expected non-negative attenuation constants, not all zero, found ({} {} {})", a.x, a.y, a.z),
+                            ));
+                        }
+                        attenuation = a.to_array();
+                    }
+                }
+                Ok(())
+            },
+        )?;
+        self.require("PointLight", &seen, &close, "position")?;
+        self.require("PointLight", &seen, &close, "color")?;
+        Ok(Light::Point {
+            position,
+            color,
+            attenuation,
+        })
+    }
+
+    fn background(&mut self) -> Result<(Vec3, Option<Vec3>)> {
+        self.keyword("Background")?;
+        let (mut color, mut ambient) = (Vec3::ZERO, None);
+        let (seen, close) =
+            self.block_fields("Background", &["color", "ambientLight"], &mut |p, name| {
+                if name == "color" {
+                    color = p.vec3("color")?;
+                } else {
+                    ambient = Some(p.vec3("ambientLight")?);
+                }
+                Ok(())
+            })?;
+        self.require("Background", &seen, &close, "color")?;
+        Ok((color, ambient))
+    }
+
+    fn materials(&mut self) -> Result<Vec<Material>> {
+        self.keyword("Materials")?;
+        self.keyword("{")?;
+        self.keyword("numMaterials")?;
+        let n = self.count("numMaterials")?;
+        let mut materials = Vec::new();
+        for i in 0..n {
+            let Some(tok) = self.peek() else {
+                return Err(self.expected("a material"));
+            };
+            let m = match tok.text {
+                "Material" | "PhongMaterial" => Material::Phong(self.phong()?),
+                "Checkerboard" | "Noise" | "Marble" | "Wood" => self.texture()?,
+                _ => {
+                    return Err(self.expected(&format!(
+                        "a material (Material, PhongMaterial, Checkerboard, Noise, Marble or \
+                         Wood) for numMaterials {n}, after {i}"
+                    )));
+                }
+            };
+            materials.push(m);
+        }
+        if self.peek().is_some_and(|t| t.text != "}") {
+            return Err(self.expected(&format!("`}}` after {n} materials (numMaterials {n})")));
+        }
+        self.keyword("}")?;
+        Ok(materials)
+    }
+
+    fn phong(&mut self) -> Result<Phong> {
+        let kind = self.next("a material")?;
+        let mut m = Phong::default();
+        self.block_fields(
+            kind.text,
+            &[
+                "diffuseColor",
+                "specularColor",
+                "exponent",
+                "reflectiveColor",
+                "transparentColor",
+                "indexOfRefraction",
+            ],
+            &mut |p, name| {
+                match name {
+                    "diffuseColor" => m.diffuse = p.vec3(name)?,
+                    "specularColor" => m.specular = p.vec3(name)?,
+                    "reflectiveColor" => m.reflective = p.vec3(name)?,
+                    "transparentColor" => m.transparent = p.vec3(name)?,
+                    "exponent" => {
+                        let at = p.peek();
+                        m.exponent = p.number(name)?;
+                        if m.exponent < 0.0 {
+                            return Err(p.error_at(
+                                at.as_ref(),
+                                format!("expected a non-negative exponent, found {}", m.exponent),
+                            ));
+                        }
+                    }
+                    _ => m.ior = p.positive(name)?,
+                }
+                Ok(())
+            },
+        )?;
+        Ok(m)
+    }
+
+    fn texture(&mut self) -> Result<Material> {
+        let kind = self.next("a texture")?;
+        let name: &'static str = match kind.text {
+            "Checkerboard" => "Checkerboard",
+            "Noise" => "Noise",
+            "Marble" => "Marble",
+            _ => "Wood",
+        };
+        self.keyword("{")?;
+        self.keyword("Transform")?;
+        self.keyword("{")?;
+        while self.peek().is_some_and(|t| t.text != "}") {
+            self.xform()?;
+        }
+        self.keyword("}")?;
+        for _ in 0..2 {
+            self.keyword("materialIndex")?;
+            let at = self.peek();
+            let i = self.count("materialIndex")?;
+            self.material_refs
+                .push((i.min(u32::MAX as usize - 1) as u32, at.unwrap()));
+        }
+        if name != "Checkerboard" {
+            self.keyword("octaves")?;
+            self.count("octaves")?;
+        }
+        if name == "Marble" || name == "Wood" {
+            self.keyword("frequency")?;
+            self.number("frequency")?;
+            self.keyword("amplitude")?;
+            self.number("amplitude")?;
+        }
+        self.keyword("}")?;
+        Ok(Material::Texture {
+            kind: name,
+            line: kind.line,
+            col: kind.col,
+        })
+    }
+
+    fn nest(&mut self) -> Result<()> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err(self.expected(&format!(
+                "at most {MAX_NESTING} nested groups and transforms"
+            )));
+        }
+        Ok(())
+    }
+
+    fn group(&mut self) -> Result<Object> {
+        self.nest()?;
+        self.keyword("Group")?;
+        self.keyword("{")?;
+        self.keyword("numObjects")?;
+        let n = self.count("numObjects")?;
+        let mut children = Vec::new();
+        loop {
+            self.material_index()?;
+            if children.len() == n {
+                break;
+            }
+            if self.peek().is_some_and(|t| t.text == "}") || self.peek().is_none() {
+                return Err(self.expected(&format!(
+                    "{OBJECTS} for numObjects {n}, after {}",
+                    children.len()
+                )));
+            }
+            children.push(self.object()?);
+        }
+        if self.peek().is_some_and(|t| t.text != "}") {
+            return Err(self.expected(&format!("`}}` after {n} objects (numObjects {n})")));
+        }
+        self.keyword("}")?;
+        self.depth -= 1;
+        Ok(Object::Group(children))
+    }
+
+    /// Any number of `MaterialIndex i` (the last one counts).
+    fn material_index(&mut self) -> Result<()> {
+        while self.peek().is_some_and(|t| t.text == "MaterialIndex") {
+            self.pos += 1;
+            let at = self.peek();
+            let i = self.count("MaterialIndex")?;
+            let i = i.min(NO_MATERIAL as usize - 1) as u32;
+            self.material_refs.push((i, at.unwrap()));
+            self.current_material = i;
+        }
+        Ok(())
+    }
+
+    fn object(&mut self) -> Result<Object> {
+        let Some(tok) = self.peek() else {
+            return Err(self.expected(OBJECTS));
+        };
+        let material = self.current_material;
+        match tok.text {
+            "Sphere" => {
+                self.pos += 1;
+                let (mut center, mut radius) = (Vec3::ZERO, 0.0);
+                let (seen, close) =
+                    self.block_fields("Sphere", &["center", "radius"], &mut |p, name| {
+                        if name == "center" {
+                            center = p.vec3("center")?;
+                        } else {
+                            radius = p.positive("radius")?;
+                        }
+                        Ok(())
+                    })?;
+                self.require("Sphere", &seen, &close, "center")?;
+                self.require("Sphere", &seen, &close, "radius")?;
+                Ok(Object::Sphere {
+                    center,
+                    radius,
+                    material,
+                })
+            }
+            "Plane" => {
+                self.pos += 1;
+                let (mut normal, mut offset) = (Vec3::ZERO, 0.0);
+                let (seen, close) =
+                    self.block_fields("Plane", &["normal", "offset"], &mut |p, name| {
+                        if name == "normal" {
+                            normal = p.direction("normal")?;
+                        } else {
+                            offset = p.number("offset")?;
+                        }
+                        Ok(())
+                    })?;
+                self.require("Plane", &seen, &close, "normal")?;
+                self.require("Plane", &seen, &close, "offset")?;
+                let len = normal.length();
+                Ok(Object::Plane {
+                    normal: normal / len,
+                    offset: offset / len,
+                    material,
+                })
+            }
+            "Triangle" => {
+                self.pos += 1;
+                let mut v = [Vec3::ZERO; 3];
+                let (seen, close) = self.block_fields(
+                    "Triangle",
+                    &["vertex0", "vertex1", "vertex2"],
+                    &mut |p, name| {
+                        let i = (name.as_bytes()[6] - b'0') as usize;
+                        v[i] = p.vec3(name)?;
+                        Ok(())
+                    },
+                )?;
+                for name in ["vertex0", "vertex1", "vertex2"] {
+                    self.require("Triangle", &seen, &close, name)?;
+                }
+                if is_degenerate(&v) {
+                    return Err(self.error_at(
+                        Some(&tok),
+                        "expected a triangle with non-zero area, found a degenerate one (its vertices are collinear)".to_string(),
+                    ));
+                }
+                Ok(Object::Triangle { v, material })
+            }
+            "TriangleMesh" => {
+                self.pos += 1;
+                self.keyword("{")?;
+                self.keyword("obj_file")?;
+                let file = self.next("an OBJ file name")?;
+                self.keyword("}")?;
+                let path = self.resolve(file.text);
+                let triangles = obj::load_obj(&path).map_err(|e| match e {
+                    Error::Io { source, .. } => self.error_at(
+                        Some(&file),
+                        format!("cannot read OBJ file `{}`: {source}", path.display()),
+                    ),
+                    other => other,
+                })?;
+                Ok(Object::Mesh {
+                    triangles,
+                    material,
+                })
+            }
+            "Group" => self.group(),
+            "Transform" => {
+                self.nest()?;
+                self.pos += 1;
+                self.keyword("{")?;
+                let mut matrix = Mat4::IDENTITY;
+                while self.peek().is_some_and(|t| is_xform(t.text)) {
+                    matrix *= self.xform()?;
+                }
+                self.material_index()?;
+                let child = self.object()?;
+                self.material_index()?;
+                self.keyword("}")?;
+                self.depth -= 1;
+                let det = matrix.determinant();
+                let inverse = matrix.inverse();
+                if !(det.abs() > 1e-12 && det.is_finite() && inverse.is_finite()) {
+                    return Err(self.error_at(
+                        Some(&tok),
+                        "expected an invertible transform, found a singular one (a zero scale?)"
+                            .to_string(),
+                    ));
+                }
+                Ok(Object::Transform(Box::new(Transformed::new(matrix, child))))
+            }
+            _ => Err(self.expected(OBJECTS)),
+        }
+    }
+
+    fn xform(&mut self) -> Result<Mat4> {
+        let tok = self.next("a transform")?;
+        let m = match tok.text {
+            "Translate" => Mat4::from_translation(self.vec3("Translate")?),
+            "Scale" => {
+                let at = self.peek();
+                let s = self.vec3("Scale")?;
+                if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
+                    return Err(self.error_at(
+                        at.as_ref(),
+                        format!(
+                            "expected non-zero scale factors, found ({} {} {})",
+                            s.x, s.y, s.z
+                        ),
+                    ));
+                }
+                Mat4::from_scale(s)
+            }
+            "UniformScale" => {
+                let at = self.peek();
+                let s = self.number("UniformScale")?;
+                if s == 0.0 {
+                    return Err(self.error_at(
+                        at.as_ref(),
+                        "expected a non-zero scale factor, found 0".to_string(),
+                    ));
+                }
+                Mat4::from_scale(Vec3::splat(s))
+            }
+            "XRotate" => Mat4::from_rotation_x(self.number("XRotate")?.to_radians()),
+            "YRotate" => Mat4::from_rotation_y(self.number("YRotate")?.to_radians()),
+            "ZRotate" => Mat4::from_rotation_z(self.number("ZRotate")?.to_radians()),
+            "Rotate" => {
+                self.keyword("{")?;
+                let axis = self.direction("the Rotate axis")?.normalize();
+                let angle = self.number("the Rotate angle")?.to_radians();
+                self.keyword("}")?;
+                Mat4::from_axis_angle(axis, angle)
+            }
+            "Matrix" => {
+                self.keyword("{")?;
+                let mut rows = [0.0f32; 16];
+                for v in rows.iter_mut() {
+                    *v = self.number("Matrix")?;
+                }
+                self.keyword("}")?;
+                Mat4::from_cols_array(&rows).transpose()
+            }
+            _ => {
+                self.pos -= 1;
+                return Err(self.expected(
+                    "a transform (Translate, Scale, UniformScale, XRotate, YRotate, ZRotate, \
+                     Rotate or Matrix)",
+                ));
+            }
+        };
+        Ok(m)
+    }
+
+    /// An OBJ path relative to the scene file's folder, else as given (relative to the current
+    /// folder).
+    fn resolve(&self, name: &str) -> PathBuf {
+        let beside = self
+            .path
+            .parent()
+            .map_or_else(|| PathBuf::from(name), |dir| dir.join(name));
+        if beside.exists() || Path::new(name).is_absolute() {
+            beside
+        } else if Path::new(name).exists() {
+            PathBuf::from(name)
+        } else {
+            beside
+        }
+    }
+}
+
+fn is_xform(word: &str) -> bool {
+    matches!(
+        word,
+        "Translate"
+            | "Scale"
+            | "UniformScale"
+            | "XRotate"
+            | "YRotate"
+            | "ZRotate"
+            | "Rotate"
+            | "Matrix"
+    )
+}
+
+/// True when a triangle's vertices are (numerically) collinear or coincide.
+pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let area2 = e1.cross(e2).length();
+    !(area2 > 1e-7 * e1.length() * e2.length() && area2.is_finite())
+}
+
+fn uses_material(obj: &Object, index: u32) -> bool {
+    match obj {
+        Object::Sphere { material, .. }
+        | Object::Plane { material, .. }
+        | Object::Triangle { material, .. }
+        | Object::Mesh { material, .. } => *material == index,
+        Object::Group(children) => children.iter().any(|c| uses_material(c, index)),
+        Object::Transform(t) => uses_material(&t.child, index),
+    }
+}
+
+fn set_default_material(obj: &mut Object, default: u32) {
+    match obj {
+        Object::Sphere { material, .. }
+        | Object::Plane { material, .. }
+        | Object::Triangle { material, .. }
+        | Object::Mesh { material, .. } => {
+            if *material == NO_MATERIAL {
+                *material = default;
+            }
+        }
+        Object::Group(children) => children
+            .iter_mut()
+            .for_each(|c| set_default_material(c, default)),
+        Object::Transform(t) => set_default_material(&mut t.child, default),
+    }
+}

@@ -1,0 +1,252 @@
+//! Whitted shading, shared by both tracers: what a hit looks like under each light, which shadow
+//! ray decides whether that light counts, and where the ray goes next (mirror and refracted
+//! children with their colour weights). The reference tracer calls these recursively; the packet
+//! tracer calls the same functions per queued ray and pushes the children onto next bounce's
+//! queues. Routing ("where does this ray go next") lives only in [`scatter`].
+//!
+//! The model is the MIT 6.837 one: `ambient * diffuse + sum over lights of
+//! light * (diffuse * max(n.l, 0) + specular * max(n.h, 0)^q)`, with the specular term scaled by
+//! `max(n.l, 0)` (the lecture's fix; off with `specular_fix = false`, which only clamps it to
+//! zero where `n.l <= 0`). Back faces are black unless `shade_back` flips their normal.
+
+use crate::math::{Ray, Vec3, reflect, refract, schlick};
+use crate::scene::{Light, Phong, Scene};
+
+/// Self-intersection offset: shadow, mirror and refracted rays start at `t = EPSILON`.
+pub const EPSILON: f32 = 1e-4;
+
+/// The switches of the shading model (the course's command-line options).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadeOptions {
+    /// Cast shadow rays (`-shadows`).
+    pub shadows: bool,
+    /// Shade back faces by flipping their normal (`-shade_back`); otherwise they are black.
+    pub shade_back: bool,
+    /// Maximum number of mirror/refraction bounces (`-bounces`).
+    pub bounces: u32,
+    /// Children whose weight falls below this are not traced (`-weight`).
+    pub weight: f32,
+    /// Scale the specular term by `max(n.l, 0)` (the lecture's fix).
+    pub specular_fix: bool,
+    /// Shadows are tinted by the transparent colour of the occluders instead of black.
+    pub transparent_shadows: bool,
+    /// Split transparent colour between reflection and refraction with Schlick's Fresnel term.
+    pub fresnel: bool,
+}
+
+impl Default for ShadeOptions {
+    fn default() -> ShadeOptions {
+        ShadeOptions {
+            shadows: false,
+            shade_back: false,
+            bounces: 5,
+            weight: 0.01,
+            specular_fix: true,
+            transparent_shadows: false,
+            fresnel: false,
+        }
+    }
+}
+
+/// A closest hit as the intersection code reports it, in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    /// Unit geometric normal, as the primitive defines it (not flipped towards the ray).
+    pub normal: Vec3,
+    pub material: u32,
+}
+
+/// A hit ready to shade.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub point: Vec3,
+    /// The shading normal: the geometric normal, flipped towards the viewer when `shade_back`.
+    pub normal: Vec3,
+    /// True when the ray arrived from the side the geometric normal points to.
+    pub front: bool,
+    pub material: Phong,
+}
+
+/// Prepares `hit` for shading; `None` means the pixel contribution is black (a back face
+/// without `shade_back`).
+#[inline]
+pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Option<Surface> {
+    let front = hit.normal.dot(ray.dir) <= 0.0;
+    if !front && !opts.shade_back {
+        return None;
+    }
+    let material = *scene.materials[hit.material as usize]
+        .phong()
+        .expect("textures are rejected before rendering");
+    Some(Surface {
+        point: ray.at(hit.t),
+        normal: if front { hit.normal } else { -hit.normal },
+        front,
+        material,
+    })
+}
+
+/// The ambient term of a surface.
+#[inline]
+pub fn ambient(scene: &Scene, s: &Surface) -> Vec3 {
+    scene.ambient * s.material.diffuse
+}
+
+/// Blinn-Phong for one light: `light * (kd max(n.l,0) + ks max(n.h,0)^q [* max(n.l,0)])`; zero
+/// when the surface faces away from the light.
+#[inline]
+pub fn phong(m: &Phong, dir: Vec3, n: Vec3, l: Vec3, light: Vec3, specular_fix: bool) -> Vec3 {
+    let nl = n.dot(l);
+    if nl <= 0.0 || nl.is_nan() {
+        return Vec3::ZERO;
+    }
+    let h = (l - dir.normalize()).normalize_or_zero();
+    let nh = n.dot(h).max(0.0);
+    let mut spec = nh.powf(m.exponent);
+    if specular_fix {
+        spec *= nl;
+    }
+    light * (m.diffuse * nl + m.specular * spec)
+}
+
+/// One light's contribution to a surface, before the shadow test.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// What the light adds if nothing blocks it.
+    pub color: Vec3,
+    /// The shadow ray: from the surface point towards the light.
+    pub shadow: Ray,
+    /// The shadow ray is blocked by hits with `EPSILON < t < max_t`.
+    pub max_t: f32,
+}
+
+/// The contribution of `light` to `s` seen along `dir`, with the shadow ray that decides it;
+/// `None` when the light adds nothing (surface facing away).
+#[inline]
+pub fn light_sample(
+    s: &Surface,
+    dir: Vec3,
+    light: &Light,
+    opts: &ShadeOptions,
+) -> Option<LightSample> {
+    let ill = light.illuminate(s.point);
+    let color = phong(
+        &s.material,
+        dir,
+        s.normal,
+        ill.dir,
+        ill.color,
+        opts.specular_fix,
+    );
+    if color == Vec3::ZERO {
+        return None;
+    }
+    Some(LightSample {
+        color,
+        shadow: Ray::new(s.point, ill.dir),
+        max_t: ill.distance,
+    })
+}
+
+/// A child ray: where it goes, the colour its result is multiplied by, its weight for the
+/// cutoff test, and whether it travels inside an object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spawn {
+    pub ray: Ray,
+    pub color: Vec3,
+    pub weight: f32,
+}
+
+/// The children of a surface hit: mirror and refracted rays, each `None` when not traced
+/// (black material colour, bounce limit reached, weight under the cutoff, or total internal
+/// reflection for the refracted ray). `geometric` is the unflipped normal that decides whether
+/// the ray enters or leaves (objects sit in vacuum, no nesting).
+#[inline]
+pub fn scatter(
+    s: &Surface,
+    dir: Vec3,
+    geometric: Vec3,
+    weight: f32,
+    bounce: u32,
+    opts: &ShadeOptions,
+) -> [Option<Spawn>; 2] {
+    if bounce >= opts.bounces {
+        return [None, None];
+    }
+    let m = &s.material;
+    let mut reflective = m.reflective;
+    let mut transparent = m.transparent;
+    let mut refracted = None;
+    if transparent != Vec3::ZERO {
+        let entering = geometric.dot(dir) < 0.0;
+        let (n, n_i, n_t) = if entering {
+            (geometric, 1.0, m.ior)
+        } else {
+            (-geometric, m.ior, 1.0)
+        };
+        refracted = refract(dir, n, n_i / n_t);
+        if opts.fresnel {
+            let f = schlick(-dir.normalize().dot(n), n_i, n_t);
+            reflective += transparent * f;
+            transparent *= 1.0 - f;
+        }
+    }
+    let child = |color: Vec3, d: Vec3| {
+        let w = weight * color.length();
+        (color != Vec3::ZERO && w >= opts.weight).then(|| Spawn {
+            ray: Ray::new(s.point, d),
+            color,
+            weight: w,
+        })
+    };
+    let mirror = child(reflective, reflect(dir, s.normal).normalize());
+    let transmitted = refracted.and_then(|t| child(transparent, t));
+    [mirror, transmitted]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn mat() -> Phong {
+        Phong {
+            diffuse: Vec3::new(0.5, 0.5, 0.5),
+            specular: Vec3::ONE,
+            exponent: 10.0,
+            ..Phong::default()
+        }
+    }
+
+    #[test]
+    fn surfaces_facing_away_from_the_light_are_not_lit() {
+        let c = phong(&mat(), -Vec3::Z, Vec3::Z, -Vec3::X, Vec3::ONE, true);
+        assert_eq!(c, Vec3::ZERO);
+        let c = phong(
+            &mat(),
+            -Vec3::Z,
+            Vec3::Z,
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::ONE,
+            false,
+        );
+        assert_eq!(c, Vec3::ZERO);
+    }
+
+    #[test]
+    fn specular_fix_scales_by_n_dot_l() {
+        let l = Vec3::new(1.0, 0.0, 0.2).normalize();
+        let d = Vec3::new(1.0, 0.0, -0.2).normalize(); // mirror direction: n.h is 1
+        let plain = phong(&mat(), d, Vec3::Z, l, Vec3::ONE, false);
+        let fixed = phong(&mat(), d, Vec3::Z, l, Vec3::ONE, true);
+        let nl = l.z;
+        assert!((plain.x - (0.5 * nl + 1.0)).abs() < 1e-5);
+        assert!((fixed.x - (0.5 * nl + nl)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn head_on_light_gives_diffuse_plus_specular() {
+        let c = phong(&mat(), -Vec3::Z, Vec3::Z, Vec3::Z, Vec3::ONE, true);
+        assert!((c - Vec3::splat(1.5)).length() < 1e-6);
+    }
+}

@@ -1,0 +1,132 @@
+//! Helpers shared by the integration tests: the course data folder, image loading and comparison.
+#![allow(dead_code)] // reason: each test binary uses a different subset of these helpers
+
+use std::path::{Path, PathBuf};
+
+use whitted::output::Rgb8;
+
+/// The course data folder named by `WHITTED_COURSE_DIR`, or `None` (the caller prints a skip).
+pub fn course_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("WHITTED_COURSE_DIR")?;
+    let dir = PathBuf::from(dir);
+    let dir = if dir.is_relative() {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(dir)
+    } else {
+        dir
+    };
+    assert!(
+        dir.join("COMMANDS.txt").is_file(),
+        "WHITTED_COURSE_DIR={} has no COMMANDS.txt",
+        dir.display()
+    );
+    Some(dir)
+}
+
+/// Reads an uncompressed 24-bit TGA as written by `whitted` (bottom-up or top-down).
+pub fn read_tga(path: &Path) -> Rgb8 {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(bytes[2], 2, "uncompressed true-colour TGA expected");
+    assert_eq!(bytes[16], 24, "24-bit TGA expected");
+    let id_len = bytes[0] as usize;
+    let w = u16::from_le_bytes([bytes[12], bytes[13]]) as usize;
+    let h = u16::from_le_bytes([bytes[14], bytes[15]]) as usize;
+    let top_down = bytes[17] & 0x20 != 0;
+    let pixels = &bytes[18 + id_len..];
+    let mut data = vec![0u8; w * h * 3];
+    for row in 0..h {
+        let src_row = if top_down { row } else { h - 1 - row };
+        for x in 0..w {
+            let s = (src_row * w + x) * 3;
+            let d = (row * w + x) * 3;
+            data[d] = pixels[s + 2];
+            data[d + 1] = pixels[s + 1];
+            data[d + 2] = pixels[s];
+        }
+    }
+    Rgb8 {
+        width: w as u32,
+        height: h as u32,
+        data,
+    }
+}
+
+/// Reads a PNG, TGA or PPM written by `whitted`.
+pub fn read_image(path: &Path) -> Rgb8 {
+    match path.extension().and_then(|e| e.to_str()) {
+        Some("tga") => read_tga(path),
+        Some("ppm") => {
+            let bytes = std::fs::read(path).unwrap();
+            let text_end = bytes
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| **b == b'\n')
+                .nth(2)
+                .unwrap()
+                .0;
+            let header = std::str::from_utf8(&bytes[..text_end]).unwrap();
+            let dims: Vec<u32> = header
+                .split_whitespace()
+                .skip(1)
+                .take(2)
+                .map(|v| v.parse().unwrap())
+                .collect();
+            Rgb8 {
+                width: dims[0],
+                height: dims[1],
+                data: bytes[text_end + 1..].to_vec(),
+            }
+        }
+        _ => whitted::output::read_png(path).unwrap(),
+    }
+}
+
+/// How two images differ: the share of pixels with some channel off by more than `tol`, and
+/// the largest channel difference.
+#[derive(Clone, Copy, Debug)]
+pub struct Diff {
+    pub pixels: usize,
+    pub over: usize,
+    pub max: u8,
+}
+
+impl Diff {
+    pub fn fraction_over(&self) -> f64 {
+        self.over as f64 / self.pixels.max(1) as f64
+    }
+}
+
+/// Compares two images of the same size channel by channel.
+pub fn diff(a: &Rgb8, b: &Rgb8, tol: u8) -> Diff {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "image sizes differ"
+    );
+    let mut over = 0;
+    let mut max = 0;
+    for (pa, pb) in a.data.chunks_exact(3).zip(b.data.chunks_exact(3)) {
+        let d = pa
+            .iter()
+            .zip(pb)
+            .map(|(x, y)| x.abs_diff(*y))
+            .max()
+            .unwrap();
+        max = max.max(d);
+        if d > tol {
+            over += 1;
+        }
+    }
+    Diff {
+        pixels: a.data.len() / 3,
+        over,
+        max,
+    }
+}
+
+/// A fresh empty folder under the target directory for one test.
+pub fn scratch_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
