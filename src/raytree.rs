@@ -42,6 +42,8 @@ pub struct Segment {
     /// Bounce depth (0 for the eye ray and its shadow rays).
     pub depth: u32,
     pub weight: f32,
+    /// Id of the primitive hit (see [`crate::scene::Object`]), if any.
+    pub prim: Option<u32>,
     /// Material index of the surface hit, if any.
     pub material: Option<u32>,
     /// For shadow rays: whether something blocked the light.
@@ -76,6 +78,7 @@ impl RayTree {
             end,
             depth,
             weight,
+            prim: hit.map(|h| h.prim),
             material: hit.map(|h| h.material),
             blocked: false,
         });
@@ -98,6 +101,7 @@ impl RayTree {
             end: ray.at(length),
             depth,
             weight,
+            prim: None,
             material: None,
             blocked,
         });

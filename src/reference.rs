@@ -32,6 +32,7 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             center,
             radius,
             material,
+            id,
         } => match intersect_sphere(*center, radius * radius, ray, tmin, limit) {
             Some(t) => {
                 let normal = (ray.at(t) - *center).normalize();
@@ -39,6 +40,7 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
                     t,
                     normal,
                     material: *material,
+                    prim: *id,
                 });
                 true
             }
@@ -48,28 +50,32 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             normal,
             offset,
             material,
+            id,
         } => match intersect_plane(*normal, *offset, ray, tmin, limit) {
             Some(t) => {
                 *best = Some(Hit {
                     t,
                     normal: *normal,
                     material: *material,
+                    prim: *id,
                 });
                 true
             }
             None => false,
         },
-        Object::Triangle { v, material } => {
-            intersect_one_triangle(v, *material, ray, tmin, limit, best)
+        Object::Triangle { v, material, id } => {
+            intersect_one_triangle(v, *material, *id, ray, tmin, limit, best)
         }
         Object::Mesh {
             triangles,
             material,
+            first_id,
         } => {
             let mut found = false;
-            for v in triangles {
+            for (k, v) in triangles.iter().enumerate() {
                 let limit = best.map_or(tmax, |h| h.t);
-                found |= intersect_one_triangle(v, *material, ray, tmin, limit, best);
+                let id = first_id + k as u32;
+                found |= intersect_one_triangle(v, *material, id, ray, tmin, limit, best);
             }
             found
         }
@@ -101,6 +107,7 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
 fn intersect_one_triangle(
     v: &[Vec3; 3],
     material: u32,
+    prim: u32,
     ray: &Ray,
     tmin: f32,
     tmax: f32,
@@ -114,6 +121,7 @@ fn intersect_one_triangle(
                 t,
                 normal: e1.cross(e2).normalize(),
                 material,
+                prim,
             });
             true
         }

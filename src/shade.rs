@@ -55,6 +55,8 @@ pub struct Hit {
     /// Unit geometric normal, as the primitive defines it (not flipped towards the ray).
     pub normal: Vec3,
     pub material: u32,
+    /// The primitive's id (see [`crate::scene::Object`]).
+    pub prim: u32,
 }
 
 /// A hit ready to shade.

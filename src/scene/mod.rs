@@ -150,29 +150,35 @@ impl Material {
     }
 }
 
-/// A node of the object tree. Primitives carry the index of their material.
+/// A node of the object tree. Primitives carry the index of their material and an `id`: their
+/// position in the file, counting every primitive (each mesh triangle too) depth first from 0.
+/// Both tracers report hits by this id.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Object {
     Sphere {
         center: Vec3,
         radius: f32,
         material: u32,
+        id: u32,
     },
     /// Points `p` with `normal . p = offset`; `normal` is unit length.
     Plane {
         normal: Vec3,
         offset: f32,
         material: u32,
+        id: u32,
     },
     /// Counter-clockwise vertices face the viewer.
     Triangle {
         v: [Vec3; 3],
         material: u32,
+        id: u32,
     },
-    /// An OBJ mesh: its triangles, all of one material.
+    /// An OBJ mesh: its triangles, all of one material; triangle `k` has id `first_id + k`.
     Mesh {
         triangles: Vec<[Vec3; 3]>,
         material: u32,
+        first_id: u32,
     },
     Group(Vec<Object>),
     Transform(Box<Transformed>),

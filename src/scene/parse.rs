@@ -161,6 +161,8 @@ struct Parser<'a> {
     /// Every material index used, with the token that named it, checked once all are known.
     material_refs: Vec<(u32, Token<'a>)>,
     depth: usize,
+    /// The id of the next primitive (see [`Object`]).
+    next_id: u32,
 }
 
 impl<'a> Parser<'a> {
@@ -174,6 +176,7 @@ impl<'a> Parser<'a> {
             current_material: NO_MATERIAL,
             material_refs: Vec::new(),
             depth: 0,
+            next_id: 0,
         }
     }
 
@@ -757,6 +760,7 @@ impl<'a> Parser<'a> {
                     center,
                     radius,
                     material,
+                    id: self.take_ids(1)?,
                 })
             }
             "Plane" => {
@@ -778,6 +782,7 @@ impl<'a> Parser<'a> {
                     normal: normal / len,
                     offset: offset / len,
                     material,
+                    id: self.take_ids(1)?,
                 })
             }
             "Triangle" => {
@@ -801,7 +806,11 @@ impl<'a> Parser<'a> {
                         "expected a triangle with non-zero area, found a degenerate one (its vertices are collinear)".to_string(),
                     ));
                 }
-                Ok(Object::Triangle { v, material })
+                Ok(Object::Triangle {
+                    v,
+                    material,
+                    id: self.take_ids(1)?,
+                })
             }
             "TriangleMesh" => {
                 self.pos += 1;
@@ -817,9 +826,11 @@ impl<'a> Parser<'a> {
                     ),
                     other => other,
                 })?;
+                let first_id = self.take_ids(triangles.len())?;
                 Ok(Object::Mesh {
                     triangles,
                     material,
+                    first_id,
                 })
             }
             "Group" => self.group(),
@@ -848,6 +859,18 @@ impl<'a> Parser<'a> {
                 Ok(Object::Transform(Box::new(Transformed::new(matrix, child))))
             }
             _ => Err(self.expected(OBJECTS)),
+        }
+    }
+
+    /// Reserves `n` consecutive primitive ids.
+    fn take_ids(&mut self, n: usize) -> Result<u32> {
+        let first = self.next_id;
+        match u32::try_from(n).ok().and_then(|n| first.checked_add(n)) {
+            Some(next) if next < u32::MAX => {
+                self.next_id = next;
+                Ok(first)
+            }
+            _ => Err(self.expected("at most 4294967294 primitives")),
         }
     }
 
