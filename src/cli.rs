@@ -39,7 +39,7 @@ RENDERING (defaults in brackets):
                                images do [on for course-style command lines]
     --transparent-shadows      tint shadows by the transparent colour of occluders [off]
     --fresnel                  Schlick Fresnel split of transparent colour [off]
-    --tracer reference|packet  which tracer renders [reference]
+    --tracer reference|packet  which tracer renders [packet]
     --threads N                worker threads [all cores]; output is identical for any N
     --max-pixels N             refuse larger images [67108864]
     --stats                    print timings and ray counts to stderr

@@ -1,12 +1,16 @@
 //! whitted: a Whitted-style ray tracer for the MIT 6.837 scene format, with a scalar reference
-//! tracer that is the specification and (in progress) an 8-wide SIMD packet tracer held to it.
+//! tracer that is the specification and an 8-wide SIMD packet tracer held to it.
 //!
 //! ```text
 //! scene file --parse--> Scene { camera, lights, materials, object tree }
 //!                          |
 //!            render(scene, RenderOptions) -> Frame { colour, depth, normal }
-//!                          |  Tracer::Reference: reference.rs, recursive, one ray at a time
-//!                          |  (shade.rs and intersect/ hold the maths both tracers share)
+//!                          |  Tracer::Reference: reference.rs, recursive, one ray at a time,
+//!                          |      walks the object tree
+//!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays;
+//!                          |      wavefront/ queues rays per bounce, intersects 8 at a time
+//!                          |      (packet.rs, simd.rs)
+//!                          |  shade.rs and intersect/ hold the maths both tracers share
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
 //! ```
@@ -15,14 +19,18 @@
 
 pub mod cli;
 pub mod error;
+pub mod geometry;
 pub mod intersect;
 pub mod math;
 pub mod output;
+pub mod packet;
 pub mod raytree;
 pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod shade;
+pub mod simd;
+pub mod wavefront;
 
 pub use error::{Error, Result};
 pub use render::{Frame, RenderOptions, Tracer, render};

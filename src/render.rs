@@ -6,10 +6,12 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::geometry::Geometry;
 use crate::math::Vec3;
 use crate::reference::ReferenceTracer;
 use crate::scene::{Camera, Material, Object, Scene};
 use crate::shade::ShadeOptions;
+use crate::wavefront::render_packet;
 
 /// The largest image the renderer accepts without `--max-pixels` (64 megapixels).
 pub const DEFAULT_MAX_PIXELS: u64 = 1 << 26;
@@ -55,7 +57,7 @@ impl Default for RenderOptions {
             width: 512,
             height: 512,
             shade: ShadeOptions::default(),
-            tracer: Tracer::Reference,
+            tracer: Tracer::Packet,
             threads: 0,
             max_pixels: DEFAULT_MAX_PIXELS,
         }
@@ -76,7 +78,8 @@ pub struct Frame {
 }
 
 impl Frame {
-    fn new(width: u32, height: u32) -> Frame {
+    /// A black frame with no hits.
+    pub fn new(width: u32, height: u32) -> Frame {
         let n = width as usize * height as usize;
         Frame {
             width,
@@ -157,9 +160,10 @@ pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Frame> {
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
     match opts.tracer {
         Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts))),
-        Tracer::Packet => Err(Error::Other(
-            "the packet tracer is not built yet: use --tracer reference".to_string(),
-        )),
+        Tracer::Packet => {
+            let geometry = Geometry::from_scene(scene);
+            Ok(pool.install(|| render_packet(scene, &geometry, opts)))
+        }
     }
 }
 

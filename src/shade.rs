@@ -13,7 +13,7 @@ use crate::math::{Ray, Vec3, reflect, refract, schlick};
 use crate::scene::{Light, Phong, Scene};
 
 /// Self-intersection offset: shadow, mirror and refracted rays start at `t = EPSILON`.
-pub const EPSILON: f32 = 1e-4;
+pub const EPSILON: f32 = 1e-3;
 
 /// The switches of the shading model (the course's command-line options).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,7 +1,8 @@
 //! Claim: every A1-A4 handout command line of the course that names an output runs verbatim
 //! (with `whitted` for `raytracer`) from its assignment folder, exits 0 and writes what it names;
-//! and all 61 instructor images of assignments 1-4 are matched: at least 99% of pixels within
-//! 2/255 in every channel.
+//! and all 61 instructor images of assignments 1-4 are matched, by both tracers: at least 99% of
+//! pixels within 2/255 in every channel. (Verbatim commands use the default packet tracer; each
+//! also runs with `--tracer reference`.)
 //!
 //! The course data comes from the folder named by `WHITTED_COURSE_DIR` (`.ci/run` sets it to
 //! `../shared/scenes-6837`); without it the test prints that it skipped. The assignment folders
@@ -76,24 +77,26 @@ fn run(dir: &Path, args: &[String]) {
     );
 }
 
-#[test]
-fn course_commands_run_and_match_the_instructor_images() {
-    let Some(course) = course_dir() else {
-        eprintln!("skipped: WHITTED_COURSE_DIR is not set");
-        return;
+/// Runs every A1-A4 command naming an output with `extra` appended (nothing: verbatim) and
+/// compares the 61 instructor images; panics with a report if any is not matched.
+fn match_instructor_images(course: &Path, extra: &[&str], tag: &str) {
+    let with_extra = |args: &[String]| {
+        let mut args = args.to_vec();
+        args.extend(extra.iter().map(|a| a.to_string()));
+        args
     };
     // Render every A1-A4 command that names an output; remember where each file went.
     let mut rendered: BTreeMap<String, PathBuf> = BTreeMap::new();
     let mut by_output: BTreeMap<String, (u32, Vec<String>)> = BTreeMap::new();
-    for (n, cmd) in commands(&course).iter().enumerate() {
+    for (n, cmd) in commands(course).iter().enumerate() {
         if cmd.assignment > 4 || outputs(&cmd.args).is_empty() {
             continue;
         }
         let dir = linked_folder(
             &course.join(format!("assignment{}", cmd.assignment)),
-            &format!("course_{n}"),
+            &format!("course_{tag}_{n}"),
         );
-        run(&dir, &cmd.args);
+        run(&dir, &with_extra(&cmd.args));
         for file in outputs(&cmd.args) {
             let path = dir.join(&file);
             assert!(
@@ -121,11 +124,12 @@ fn course_commands_run_and_match_the_instructor_images() {
         for reference in names {
             let stem = reference.file_stem().unwrap().to_str().unwrap().to_string();
             let ours = if let Some(base) = stem.strip_suffix("_fix") {
-                let (assignment, mut args) = by_output[base].clone();
+                let (assignment, args) = by_output[base].clone();
                 let dir = linked_folder(
                     &course.join(format!("assignment{assignment}")),
-                    &format!("course_fix_{stem}"),
+                    &format!("course_{tag}_fix_{stem}"),
                 );
+                let mut args = with_extra(&args);
                 args.push("--specular-fix".into());
                 run(&dir, &args);
                 Some(dir.join(format!("{base}.tga")))
@@ -145,10 +149,31 @@ fn course_commands_run_and_match_the_instructor_images() {
             }
         }
     }
-    eprintln!("{}", report.join("\n"));
+    eprintln!("{tag}:\n{}", report.join("\n"));
     assert_eq!(
         count, 61,
         "expected the 61 instructor images of assignments 1-4"
     );
-    assert!(failures.is_empty(), "images not matched: {failures:?}");
+    assert!(
+        failures.is_empty(),
+        "{tag}: images not matched: {failures:?}"
+    );
+}
+
+#[test]
+fn verbatim_course_commands_match_the_instructor_images() {
+    let Some(course) = course_dir() else {
+        eprintln!("skipped: WHITTED_COURSE_DIR is not set");
+        return;
+    };
+    match_instructor_images(&course, &[], "packet");
+}
+
+#[test]
+fn reference_tracer_matches_the_instructor_images() {
+    let Some(course) = course_dir() else {
+        eprintln!("skipped: WHITTED_COURSE_DIR is not set");
+        return;
+    };
+    match_instructor_images(&course, &["--tracer", "reference"], "reference");
 }

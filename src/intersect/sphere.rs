@@ -1,7 +1,11 @@
 //! Ray-sphere intersection: the quadratic `|o + t d - c|^2 = r^2`, with `d` of any length (rays
-//! in the object space of a scaling transform are not unit length).
+//! in the object space of a scaling transform are not unit length). Also spheres under a general
+//! affine transform, stored as the inverse transform that maps them to the unit sphere.
+//! Each scalar kernel sits directly above its packet twin.
 
 use crate::math::{Ray, Vec3};
+use crate::packet::RayPacket;
+use crate::simd::{F32x8, Mask, Vec3x8, ge, gt, lt, select, sqrt};
 
 /// The nearer root of the ray-sphere quadratic inside `(tmin, tmax)`, else the farther one.
 #[inline]
@@ -32,57 +36,130 @@ pub fn intersect_sphere(
     }
 }
 
+/// [`intersect_sphere`] for the active lanes of a packet: the lanes that hit inside
+/// `(rays.tmin, tmax)` and their `t`. Inactive lanes are never reported.
+#[inline(always)]
+pub fn intersect_sphere_packet(
+    center: Vec3,
+    radius2: f32,
+    rays: &RayPacket,
+    tmax: F32x8,
+) -> (Mask, F32x8) {
+    let oc = rays.origin - Vec3x8::splat(center);
+    let a = rays.dir.dot(rays.dir);
+    let half_b = oc.dot(rays.dir);
+    let c = oc.dot(oc) - F32x8::splat(radius2);
+    let disc = half_b * half_b - a * c;
+    let real = ge(disc, F32x8::splat(0.0)) & rays.active;
+    let sq = sqrt(disc);
+    let t0 = (-half_b - sq) / a;
+    let t1 = (-half_b + sq) / a;
+    let hit0 = gt(t0, rays.tmin) & lt(t0, tmax);
+    let hit1 = gt(t1, rays.tmin) & lt(t1, tmax);
+    (real & (hit0 | hit1), select(hit0, t0, t1))
+}
+
+/// Applies the 3x4 row-major affine `m` to a point.
+#[inline]
+pub fn affine_point(m: &[f32; 12], p: Vec3) -> Vec3 {
+    Vec3::new(
+        m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3],
+        m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+        m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11],
+    )
+}
+
+/// Applies the linear part of the 3x4 row-major affine `m` to a direction.
+#[inline]
+pub fn affine_vector(m: &[f32; 12], d: Vec3) -> Vec3 {
+    Vec3::new(
+        m[0] * d.x + m[1] * d.y + m[2] * d.z,
+        m[4] * d.x + m[5] * d.y + m[6] * d.z,
+        m[8] * d.x + m[9] * d.y + m[10] * d.z,
+    )
+}
+
+/// A sphere under an arbitrary affine transform, given as `inv`: the 3x4 row-major affine
+/// taking world space to the space where the sphere is the unit sphere at the origin. `t` is
+/// the same in both spaces because the direction is not renormalised.
+#[inline]
+pub fn intersect_transformed_sphere(
+    inv: &[f32; 12],
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+) -> Option<f32> {
+    let local = Ray::new(affine_point(inv, ray.origin), affine_vector(inv, ray.dir));
+    intersect_sphere(Vec3::ZERO, 1.0, &local, tmin, tmax)
+}
+
+/// [`intersect_transformed_sphere`] for the active lanes of a packet.
+#[inline(always)]
+pub fn intersect_transformed_sphere_packet(
+    inv: &[f32; 12],
+    rays: &RayPacket,
+    tmax: F32x8,
+) -> (Mask, F32x8) {
+    let m = |i: usize| F32x8::splat(inv[i]);
+    let (o, d) = (rays.origin, rays.dir);
+    let local = RayPacket {
+        origin: Vec3x8 {
+            x: m(0) * o.x + m(1) * o.y + m(2) * o.z + m(3),
+            y: m(4) * o.x + m(5) * o.y + m(6) * o.z + m(7),
+            z: m(8) * o.x + m(9) * o.y + m(10) * o.z + m(11),
+        },
+        dir: Vec3x8 {
+            x: m(0) * d.x + m(1) * d.y + m(2) * d.z,
+            y: m(4) * d.x + m(5) * d.y + m(6) * d.z,
+            z: m(8) * d.x + m(9) * d.y + m(10) * d.z,
+        },
+        ..*rays
+    };
+    intersect_sphere_packet(Vec3::ZERO, 1.0, &local, tmax)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn front_back_inside_and_miss() {
+        let inf = f32::INFINITY;
         let r = Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
-        assert_eq!(
-            intersect_sphere(Vec3::ZERO, 1.0, &r, 0.0, f32::INFINITY),
-            Some(4.0)
-        );
+        assert_eq!(intersect_sphere(Vec3::ZERO, 1.0, &r, 0.0, inf), Some(4.0));
         // From inside: the far root.
         let inside = Ray::new(Vec3::ZERO, -Vec3::Z);
         assert_eq!(
-            intersect_sphere(Vec3::ZERO, 1.0, &inside, 1e-4, f32::INFINITY),
+            intersect_sphere(Vec3::ZERO, 1.0, &inside, 1e-4, inf),
             Some(1.0)
         );
         // Behind the ray.
-        assert_eq!(
-            intersect_sphere(
-                Vec3::ZERO,
-                1.0,
-                &Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z),
-                0.0,
-                f32::INFINITY
-            ),
-            None
-        );
+        let away = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::Z);
+        assert_eq!(intersect_sphere(Vec3::ZERO, 1.0, &away, 0.0, inf), None);
         // A closer hit already known.
         assert_eq!(intersect_sphere(Vec3::ZERO, 1.0, &r, 0.0, 3.0), None);
         // Miss.
         assert_eq!(
-            intersect_sphere(Vec3::new(3.0, 0.0, 0.0), 1.0, &r, 0.0, f32::INFINITY),
+            intersect_sphere(Vec3::new(3.0, 0.0, 0.0), 1.0, &r, 0.0, inf),
             None
         );
         // Non-unit direction: t is in units of the direction.
         let r2 = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -2.0));
-        assert_eq!(
-            intersect_sphere(Vec3::ZERO, 1.0, &r2, 0.0, f32::INFINITY),
-            Some(2.0)
-        );
+        assert_eq!(intersect_sphere(Vec3::ZERO, 1.0, &r2, 0.0, inf), Some(2.0));
         // Orthographic rays accept negative t.
+        let ortho = Ray::new(Vec3::ZERO, -Vec3::Z);
         assert_eq!(
-            intersect_sphere(
-                Vec3::ZERO,
-                1.0,
-                &Ray::new(Vec3::ZERO, -Vec3::Z),
-                -f32::MAX,
-                f32::INFINITY
-            ),
+            intersect_sphere(Vec3::ZERO, 1.0, &ortho, -f32::MAX, inf),
             Some(-1.0)
         );
+    }
+
+    #[test]
+    fn transformed_sphere_is_the_unit_sphere_in_its_own_space() {
+        // World: a sphere of radius 2 at (0, 0, -3); inverse maps it to the unit sphere.
+        let inv = [0.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.5, 1.5];
+        let r = Ray::new(Vec3::ZERO, -Vec3::Z);
+        let t = intersect_transformed_sphere(&inv, &r, 0.0, f32::INFINITY).unwrap();
+        assert!((t - 1.0).abs() < 1e-6, "{t}");
     }
 }

@@ -130,3 +130,86 @@ pub fn scratch_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// Renders `scene` with both tracers and returns (reference, packet) frames.
+pub fn render_both(
+    scene: &whitted::Scene,
+    opts: &whitted::RenderOptions,
+) -> (whitted::Frame, whitted::Frame) {
+    let mut o = opts.clone();
+    o.tracer = whitted::Tracer::Reference;
+    let reference = whitted::render(scene, &o).expect("reference render");
+    o.tracer = whitted::Tracer::Packet;
+    let packet = whitted::render(scene, &o).expect("packet render");
+    (reference, packet)
+}
+
+/// Asserts that every colour, depth (where hit) and normal of a frame is finite.
+pub fn assert_finite(frame: &whitted::Frame, what: &str) {
+    for (i, c) in frame.color.iter().enumerate() {
+        assert!(c.is_finite(), "{what}: pixel {i} colour {c} is not finite");
+    }
+    for (i, n) in frame.normal.iter().enumerate() {
+        assert!(n.is_finite(), "{what}: pixel {i} normal {n} is not finite");
+    }
+    for (i, t) in frame.depth.iter().enumerate() {
+        assert!(!t.is_nan(), "{what}: pixel {i} depth is NaN");
+    }
+}
+
+/// The equivalence criterion between the two tracers: at most 0.1% of pixels differ by more
+/// than 2/255 in any channel. Returns the difference for reporting.
+pub fn assert_equivalent(a: &Rgb8, b: &Rgb8, what: &str) -> Diff {
+    let d = diff(a, b, 2);
+    assert!(
+        d.fraction_over() <= 0.001,
+        "{what}: {} of {} pixels ({:.3}%) differ by more than 2/255 (max {})",
+        d.over,
+        d.pixels,
+        100.0 * d.fraction_over(),
+        d.max
+    );
+    d
+}
+
+/// A small deterministic random number generator (PCG32) for seeded test scenes.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        let mut r = Rng(seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407));
+        r.next_u32();
+        r
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.0;
+        self.0 = old
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        let rot = (old >> 59) as u32;
+        xorshifted.rotate_right(rot)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+
+    /// Uniform integer in [0, n).
+    pub fn below(&mut self, n: u32) -> u32 {
+        self.next_u32() % n
+    }
+
+    pub fn chance(&mut self, p: f32) -> bool {
+        self.f32() < p
+    }
+}

@@ -1,0 +1,296 @@
+//! The wavefront's queues: one typed queue per kind of work, structure of arrays, allocated in a
+//! bumpalo arena that is reset once the bounce that reads it is over. [`RayQueue`] holds rays
+//! to intersect (camera rays at bounce 0, mirror and refracted rays after), [`ShadowQueue`]
+//! the shadow rays of one bounce, [`HitColumns`] the closest hits of a ray queue. Each queue has
+//! a `push_*` per kind of ray that sets every field, and loads its rays as 8-lane packets.
+
+use bumpalo::Bump;
+use bumpalo::collections::Vec as BVec;
+
+use crate::math::{Ray, Vec3};
+use crate::packet::RayPacket;
+use crate::raytree::SegmentKind;
+use crate::simd::{F32x8, LANES, Vec3x8, load_partial, mask_first};
+
+/// Marks a ray that is not recorded in a ray tree.
+pub const NO_NODE: u32 = u32::MAX;
+
+/// Rays to intersect in one bounce, and what each one carries.
+pub struct RayQueue<'b> {
+    ox: BVec<'b, f32>,
+    oy: BVec<'b, f32>,
+    oz: BVec<'b, f32>,
+    dx: BVec<'b, f32>,
+    dy: BVec<'b, f32>,
+    dz: BVec<'b, f32>,
+    /// Pixel index inside the band being rendered.
+    pub pixel: BVec<'b, u32>,
+    /// RGB factor the colour seen along the ray is multiplied by before reaching the pixel.
+    pub throughput: BVec<'b, Vec3>,
+    /// Scalar weight for the cutoff (product of the colour magnitudes along the path).
+    pub weight: BVec<'b, f32>,
+    /// Eye, reflected or transmitted.
+    pub kind: BVec<'b, SegmentKind>,
+    /// The ray-tree segment of the ray that spawned this one, or [`NO_NODE`].
+    pub parent: BVec<'b, u32>,
+}
+
+impl<'b> RayQueue<'b> {
+    /// An empty queue in `arena`.
+    pub fn new_in(arena: &'b Bump) -> RayQueue<'b> {
+        RayQueue {
+            ox: BVec::new_in(arena),
+            oy: BVec::new_in(arena),
+            oz: BVec::new_in(arena),
+            dx: BVec::new_in(arena),
+            dy: BVec::new_in(arena),
+            dz: BVec::new_in(arena),
+            pixel: BVec::new_in(arena),
+            throughput: BVec::new_in(arena),
+            weight: BVec::new_in(arena),
+            kind: BVec::new_in(arena),
+            parent: BVec::new_in(arena),
+        }
+    }
+
+    fn push(
+        &mut self,
+        ray: &Ray,
+        pixel: u32,
+        throughput: Vec3,
+        weight: f32,
+        kind: SegmentKind,
+        parent: u32,
+    ) {
+        self.ox.push(ray.origin.x);
+        self.oy.push(ray.origin.y);
+        self.oz.push(ray.origin.z);
+        self.dx.push(ray.dir.x);
+        self.dy.push(ray.dir.y);
+        self.dz.push(ray.dir.z);
+        self.pixel.push(pixel);
+        self.throughput.push(throughput);
+        self.weight.push(weight);
+        self.kind.push(kind);
+        self.parent.push(parent);
+    }
+
+    /// Queues the camera ray of `pixel`: full weight, no parent.
+    pub fn push_camera(&mut self, ray: &Ray, pixel: u32) {
+        self.push(ray, pixel, Vec3::ONE, 1.0, SegmentKind::Eye, NO_NODE);
+    }
+
+    /// Queues a mirror ray.
+    pub fn push_reflected(
+        &mut self,
+        ray: &Ray,
+        pixel: u32,
+        throughput: Vec3,
+        weight: f32,
+        parent: u32,
+    ) {
+        self.push(
+            ray,
+            pixel,
+            throughput,
+            weight,
+            SegmentKind::Reflected,
+            parent,
+        );
+    }
+
+    /// Queues a refracted ray.
+    pub fn push_transmitted(
+        &mut self,
+        ray: &Ray,
+        pixel: u32,
+        throughput: Vec3,
+        weight: f32,
+        parent: u32,
+    ) {
+        self.push(
+            ray,
+            pixel,
+            throughput,
+            weight,
+            SegmentKind::Transmitted,
+            parent,
+        );
+    }
+
+    /// The number of queued rays.
+    pub fn len(&self) -> usize {
+        self.ox.len()
+    }
+
+    /// True when no ray is queued.
+    pub fn is_empty(&self) -> bool {
+        self.ox.is_empty()
+    }
+
+    /// Ray `i`.
+    pub fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
+            Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
+        )
+    }
+
+    /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet.
+    pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
+        let end = (first + LANES).min(self.len());
+        let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
+        RayPacket {
+            origin: Vec3x8 {
+                x: col(&self.ox),
+                y: col(&self.oy),
+                z: col(&self.oz),
+            },
+            dir: Vec3x8 {
+                x: col(&self.dx),
+                y: col(&self.dy),
+                z: col(&self.dz),
+            },
+            tmin: F32x8::splat(tmin),
+            active: mask_first(end - first),
+        }
+    }
+}
+
+/// Shadow rays of one bounce: each carries the colour it adds to its pixel if unblocked.
+pub struct ShadowQueue<'b> {
+    ox: BVec<'b, f32>,
+    oy: BVec<'b, f32>,
+    oz: BVec<'b, f32>,
+    dx: BVec<'b, f32>,
+    dy: BVec<'b, f32>,
+    dz: BVec<'b, f32>,
+    /// Blocked by hits in `(EPSILON, max_t)`.
+    pub max_t: BVec<'b, f32>,
+    pub pixel: BVec<'b, u32>,
+    /// What reaching the light adds to the pixel (throughput times the light's Phong term).
+    pub contribution: BVec<'b, Vec3>,
+    /// The ray-tree segment of the ray being shaded, or [`NO_NODE`].
+    pub parent: BVec<'b, u32>,
+}
+
+impl<'b> ShadowQueue<'b> {
+    /// An empty queue in `arena`.
+    pub fn new_in(arena: &'b Bump) -> ShadowQueue<'b> {
+        ShadowQueue {
+            ox: BVec::new_in(arena),
+            oy: BVec::new_in(arena),
+            oz: BVec::new_in(arena),
+            dx: BVec::new_in(arena),
+            dy: BVec::new_in(arena),
+            dz: BVec::new_in(arena),
+            max_t: BVec::new_in(arena),
+            pixel: BVec::new_in(arena),
+            contribution: BVec::new_in(arena),
+            parent: BVec::new_in(arena),
+        }
+    }
+
+    /// Queues a shadow ray.
+    pub fn push_shadow(
+        &mut self,
+        ray: &Ray,
+        max_t: f32,
+        pixel: u32,
+        contribution: Vec3,
+        parent: u32,
+    ) {
+        self.ox.push(ray.origin.x);
+        self.oy.push(ray.origin.y);
+        self.oz.push(ray.origin.z);
+        self.dx.push(ray.dir.x);
+        self.dy.push(ray.dir.y);
+        self.dz.push(ray.dir.z);
+        self.max_t.push(max_t);
+        self.pixel.push(pixel);
+        self.contribution.push(contribution);
+        self.parent.push(parent);
+    }
+
+    /// The number of queued shadow rays.
+    pub fn len(&self) -> usize {
+        self.ox.len()
+    }
+
+    /// True when no shadow ray is queued.
+    pub fn is_empty(&self) -> bool {
+        self.ox.is_empty()
+    }
+
+    /// Shadow ray `i`.
+    pub fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
+            Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
+        )
+    }
+
+    /// Shadow rays `first..first + 8` as a packet starting at `tmin`, with their `max_t`.
+    pub fn packet(&self, first: usize, tmin: f32) -> (RayPacket, F32x8) {
+        let end = (first + LANES).min(self.len());
+        let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
+        let rays = RayPacket {
+            origin: Vec3x8 {
+                x: col(&self.ox),
+                y: col(&self.oy),
+                z: col(&self.oz),
+            },
+            dir: Vec3x8 {
+                x: col(&self.dx),
+                y: col(&self.dy),
+                z: col(&self.dz),
+            },
+            tmin: F32x8::splat(tmin),
+            active: mask_first(end - first),
+        };
+        (rays, col(&self.max_t))
+    }
+}
+
+/// The closest hit of every ray of a [`RayQueue`]: `t` and geometry index (negative: none).
+pub struct HitColumns<'b> {
+    pub t: BVec<'b, f32>,
+    pub prim: BVec<'b, i32>,
+}
+
+impl<'b> HitColumns<'b> {
+    /// Room for `n` hits in `arena`.
+    pub fn with_capacity_in(n: usize, arena: &'b Bump) -> HitColumns<'b> {
+        HitColumns {
+            t: BVec::with_capacity_in(n, arena),
+            prim: BVec::with_capacity_in(n, arena),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::simd::bitmask;
+
+    #[test]
+    fn packets_cover_every_ray_once_with_the_tail_masked() {
+        let arena = Bump::new();
+        for n in [0usize, 1, 7, 8, 9, 16, 23] {
+            let mut q = RayQueue::new_in(&arena);
+            for i in 0..n {
+                q.push_camera(&Ray::new(Vec3::splat(i as f32), Vec3::X), i as u32);
+            }
+            let mut seen = Vec::new();
+            for first in (0..q.len()).step_by(LANES) {
+                let p = q.packet(first, 0.0);
+                let live = bitmask(p.active).count_ones() as usize;
+                assert_eq!(live, (n - first).min(LANES));
+                for lane in 0..live {
+                    seen.push(p.origin.lane(lane).x as usize);
+                }
+            }
+            assert_eq!(seen, (0..n).collect::<Vec<_>>());
+        }
+    }
+}
