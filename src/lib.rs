@@ -17,6 +17,7 @@
 //!
 //! `main.rs` is a thin wrapper around [`cli::run`].
 
+pub mod bvh;
 pub mod cli;
 pub mod error;
 pub mod geometry;
