@@ -35,7 +35,10 @@ fn the_same_bytes_for_every_thread_count() {
             };
             let one = render(1);
             for threads in [2, 3, 8] {
-                assert!(render(threads) == one, "{name} {tracer:?}: {threads} threads differ from 1");
+                assert!(
+                    render(threads) == one,
+                    "{name} {tracer:?}: {threads} threads differ from 1"
+                );
             }
         }
     }

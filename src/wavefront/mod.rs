@@ -151,7 +151,7 @@ fn render_band(
     let Arenas { even, odd, scratch } = arenas;
     even.reset();
     odd.reset();
-    let mut rays = RayQueue::new_in(even);
+    let mut rays = RayQueue::with_capacity_in((band.width * band.rows) as usize, even);
     stages::generate_camera_rays(&ctx.scene.camera, band, &mut rays);
     let mut bounce = 0;
     // Two bounces per turn so each queue's arena is named: even bounces read `even`, odd `odd`.
@@ -189,11 +189,22 @@ fn run_bounce<'n>(
         crate::shade::EPSILON
     };
     let hits = intersect_closest(ctx.geometry, &rays, tmin, scratch);
+    // Upper bounds: one shadow ray per light and hit (with shadows on), two children per hit.
+    let shadows = if ctx.opts.shadows {
+        ctx.scene.lights.len() * rays.len()
+    } else {
+        0
+    };
+    let children = if bounce < ctx.opts.bounces {
+        2 * rays.len()
+    } else {
+        0
+    };
     let mut q = BounceQueues {
+        shadows: queue::ShadowQueue::with_capacity_in(shadows, scratch),
+        next: RayQueue::with_capacity_in(children, next_arena),
         rays,
         hits,
-        shadows: queue::ShadowQueue::new_in(scratch),
-        next: RayQueue::new_in(next_arena),
     };
     shade_hits(ctx, bounce, &mut q, out, tree.as_deref_mut());
     trace_shadow_rays(ctx, &q.shadows, out, tree);
