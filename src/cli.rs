@@ -251,7 +251,6 @@ pub fn execute(cmd: Command) -> Result<()> {
     }
     let t0 = Instant::now();
     let scene = Scene::load(&cmd.scene)?;
-    render::check_scene(&scene, &cmd.scene)?;
     let load_time = t0.elapsed();
     if outputs.is_empty() {
         eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");

@@ -168,10 +168,7 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
     let mut light = Vec3::ONE;
     let mut tmin = EPSILON;
     while let Some(hit) = closest_hit(&scene.root, ray, tmin, max_t) {
-        let m = scene.materials[hit.material as usize]
-            .phong()
-            .expect("textures are rejected before rendering");
-        light *= m.transparent;
+        light *= scene.phong_at(hit.material, ray.at(hit.t)).transparent;
         if light == Vec3::ZERO {
             break;
         }

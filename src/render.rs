@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::math::Vec3;
 use crate::reference::ReferenceTracer;
-use crate::scene::{Camera, Material, Object, Scene};
+use crate::scene::{Camera, Scene};
 use crate::shade::ShadeOptions;
 use crate::wavefront::render_packet;
 
@@ -119,36 +119,6 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
         )));
     }
     Ok(())
-}
-
-/// Checks that the scene uses nothing the tracers cannot render yet.
-pub fn check_scene(scene: &Scene, path: &std::path::Path) -> Result<()> {
-    let mut used = vec![false; scene.materials.len()];
-    mark_materials(&scene.root, &mut used);
-    for (m, used) in scene.materials.iter().zip(used) {
-        if let (Material::Texture { kind, line, col }, true) = (m, used) {
-            return Err(Error::parse(
-                path,
-                *line,
-                *col,
-                format!(
-                    "{kind} solid textures are not supported yet (the material is used by an object)"
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn mark_materials(obj: &Object, used: &mut [bool]) {
-    match obj {
-        Object::Sphere { material, .. }
-        | Object::Plane { material, .. }
-        | Object::Triangle { material, .. }
-        | Object::Mesh { material, .. } => used[*material as usize] = true,
-        Object::Group(children) => children.iter().for_each(|c| mark_materials(c, used)),
-        Object::Transform(t) => mark_materials(&t.child, used),
-    }
 }
 
 /// Renders `scene` with `opts`.

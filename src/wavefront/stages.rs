@@ -162,12 +162,12 @@ pub fn trace_shadow_rays(
                         active &= !(1 << lane);
                         continue;
                     }
+                    let ray = rays.ray(lane);
                     let material = ctx
                         .geometry
-                        .surface(prims[lane] as u32, &rays.ray(lane), ts[lane])
+                        .surface(prims[lane] as u32, &ray, ts[lane])
                         .material;
-                    let m = scene_phong(ctx, material);
-                    light[lane] *= m.transparent;
+                    light[lane] *= ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
                     tmin[lane] = ts[lane];
                     if light[lane] == Vec3::ZERO {
                         active &= !(1 << lane);
@@ -196,10 +196,4 @@ pub fn trace_shadow_rays(
             }
         }
     }
-}
-
-fn scene_phong<'a>(ctx: &'a Context<'_>, material: u32) -> &'a crate::scene::Phong {
-    ctx.scene.materials[material as usize]
-        .phong()
-        .expect("textures are rejected before rendering")
 }
