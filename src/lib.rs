@@ -9,6 +9,9 @@
 //!                          |  (shade.rs and intersect/ hold the maths both tracers share)
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
+//!
+//! one pixel again --trace_ray_tree--> raytree.rs: RayTree
+//! stats.rs: RayCounts, filled by the tracers
 //! ```
 //!
 //! `main.rs` is a thin wrapper around [`cli::run`].
@@ -23,6 +26,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod shade;
+pub mod stats;
 
 pub use error::{Error, Result};
 pub use render::{Frame, RenderOptions, Tracer, render};
