@@ -3,7 +3,8 @@
 //! has eye, shadow and reflected ones; every child starts where its parent ends; the tree is
 //! the same every time; [`RayTree::canonical`] makes any recording order compare equal (as
 //! the packet tracer's bounce-by-bounce order must); the JSON parses and holds every segment;
-//! and the CLI writes the JSON and a witness PNG of the requested size, refusing pixels outside
+//! the witness picture shows every kind of segment the tree has, in its course colour; and
+//! the CLI writes the JSON and a witness PNG of the requested size, refusing pixels outside
 //! the image with exit code 2.
 
 mod common;
@@ -357,4 +358,43 @@ fn a_pixel_outside_the_image_is_a_usage_error() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("needs --ray-tree"));
+}
+
+/// Pixels of exactly `color` (display space, rounded as the drawing does).
+fn count_color(img: &whitted::output::Rgb8, color: [f32; 3]) -> usize {
+    let want = color.map(|c| (c * 255.0 + 0.5) as u8);
+    img.data.chunks_exact(3).filter(|p| **p == want).count()
+}
+
+#[test]
+fn the_witness_picture_shows_every_kind_of_segment_in_the_tree() {
+    use whitted::witness::{WitnessSpec, draw_ray_tree, kind_color, witness_camera};
+    for (pixel, blocked) in [(GLASS, true), (MIRROR, true)] {
+        let scene = Scene::load(&scene_path(pixel.0)).unwrap();
+        let opts = options();
+        let tree = tree_of(pixel);
+        let camera = witness_camera(&scene.camera, &tree, 400, 300, &WitnessSpec::default());
+        let witness_scene = Scene {
+            camera: camera.clone(),
+            root: whitted::witness::cutaway(&scene.root, camera.center),
+            ..scene.clone()
+        };
+        let frame = whitted::render(&witness_scene, &opts).unwrap();
+        let size = (opts.width, opts.height);
+        let drawn = draw_ray_tree(&frame, &camera, &scene.camera, size, &tree, "t");
+        let bare = draw_ray_tree(&frame, &camera, &scene.camera, size, &RayTree::new(), "t");
+        let mut kinds: Vec<(SegmentKind, bool)> =
+            tree.segments.iter().map(|s| (s.kind, s.blocked)).collect();
+        kinds.dedup();
+        assert!(kinds.contains(&(SegmentKind::Shadow, blocked)));
+        for (kind, blocked) in kinds {
+            let color = kind_color(kind, blocked);
+            let extra = count_color(&drawn, color) - count_color(&bare, color);
+            assert!(
+                extra >= 10,
+                "{}: {kind:?} (blocked {blocked}) drawn on {extra} pixels",
+                pixel.0
+            );
+        }
+    }
 }
