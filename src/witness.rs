@@ -186,6 +186,16 @@ fn framing(
             .filter(|s| s.parent.is_none())
             .map(|s| s.origin),
     );
+    // An orthographic camera is drawn as its screen rectangle, which should fit too (the
+    // witness picture has the main image's size).
+    if let Projection::Orthographic { size } = main.kind {
+        let (fx, fy) = (width as f32 / side * 0.5, height as f32 / side * 0.5);
+        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            points.push(
+                main.center + main.horizontal * (sx * fx * size) + main.up * (sy * fy * size),
+            );
+        }
+    }
     points.retain(|p| p.is_finite());
     // Centre the picture on the points' extent across the view direction.
     let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
