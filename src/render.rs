@@ -1,16 +1,20 @@
 //! Whole-frame rendering: options, the choice of tracer, and the [`Frame`] they fill (colour,
-//! plus the primary hit's distance and normal for the depth and normal images). Rows are
-//! rendered in parallel with rayon; every pixel is computed independently, so the result does
-//! not depend on the thread count.
+//! plus the primary hit's distance and normal for the depth and normal images, and the rays
+//! cast). Rows are rendered in parallel with rayon; every pixel is computed independently, so
+//! the result does not depend on the thread count. A render reports finished rows to an
+//! optional [`Progress`] hook (the CLI's progress bar); [`trace_ray_tree`] traces one pixel
+//! again and records its ray tree.
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::math::Vec3;
+use crate::raytree::RayTree;
 use crate::reference::ReferenceTracer;
 use crate::scene::{Camera, Scene};
 use crate::shade::ShadeOptions;
+use crate::stats::RayCounts;
 use crate::wavefront::render_packet;
 
 /// The largest image the renderer accepts without `--max-pixels` (64 megapixels).
@@ -34,6 +38,14 @@ impl Tracer {
             "reference" => Some(Tracer::Reference),
             "packet" => Some(Tracer::Packet),
             _ => None,
+        }
+    }
+
+    /// The name `--tracer` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tracer::Reference => "reference",
+            Tracer::Packet => "packet",
         }
     }
 }
@@ -75,7 +87,13 @@ pub struct Frame {
     pub depth: Vec<f32>,
     /// Unit world normal of the first hit; zero where nothing was hit.
     pub normal: Vec<Vec3>,
+    /// The rays cast to make the frame, by kind and bounce.
+    pub rays: RayCounts,
 }
+
+/// Told how many image rows a render has just finished; called from worker threads, so it
+/// must be cheap and thread-safe (the CLI's progress bar; `&|_| {}` for none).
+pub type Progress<'a> = &'a (dyn Fn(u32) + Sync);
 
 impl Frame {
     /// A black frame with no hits.
@@ -87,6 +105,7 @@ impl Frame {
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
+            rays: RayCounts::default(),
         }
     }
 }
@@ -123,37 +142,48 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
 
 /// Renders `scene` with `opts`.
 pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Frame> {
+    render_with_progress(scene, opts, &|_| {})
+}
+
+/// Renders `scene` with `opts`, reporting finished rows to `progress`.
+pub fn render_with_progress(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Result<Frame> {
     check_options(opts)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
         .build()
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
     match opts.tracer {
-        Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts))),
+        Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
         Tracer::Packet => {
             let geometry = Geometry::from_scene(scene);
-            Ok(pool.install(|| render_packet(scene, &geometry, opts)))
+            Ok(pool.install(|| render_packet(scene, &geometry, opts, progress)))
         }
     }
 }
 
-/// Renders with the reference tracer, rows in parallel.
-pub fn render_reference(scene: &Scene, opts: &RenderOptions) -> Frame {
+/// Renders with the reference tracer, rows in parallel; each row counts its rays locally and
+/// the counts are summed at the end.
+pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Frame {
     let (w, h) = (opts.width, opts.height);
     let mut frame = Frame::new(w, h);
     let tracer = ReferenceTracer::new(scene, opts.shade);
-    frame
+    frame.rays = frame
         .color
         .par_chunks_mut(w as usize)
         .zip(frame.depth.par_chunks_mut(w as usize))
         .zip(frame.normal.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(y, ((color, depth), normal))| {
+        .map(|(y, ((color, depth), normal))| {
+            let mut rays = RayCounts::default();
             for x in 0..w {
                 let ray = scene
                     .camera
                     .generate_ray(Camera::pixel_point(x, y as u32, w, h));
-                let sample = tracer.trace_primary(&ray, None);
+                let sample = tracer.trace_primary_counted(&ray, None, &mut rays);
                 let i = x as usize;
                 color[i] = sample.color;
                 if let Some(hit) = sample.hit {
@@ -161,6 +191,51 @@ pub fn render_reference(scene: &Scene, opts: &RenderOptions) -> Frame {
                     normal[i] = hit.normal;
                 }
             }
-        });
+            progress(1);
+            rays
+        })
+        .reduce(RayCounts::default, RayCounts::merged);
     frame
+}
+
+/// Checks that pixel `(x, y)` (x from the left, y from the top) lies in the image of `opts`.
+pub fn check_pixel(x: u32, y: u32, opts: &RenderOptions) -> Result<()> {
+    if x >= opts.width || y >= opts.height {
+        return Err(Error::Usage(format!(
+            "pixel ({x}, {y}) is outside the {}x{} image: expected x in 0..={} and y in 0..={}",
+            opts.width,
+            opts.height,
+            opts.width.saturating_sub(1),
+            opts.height.saturating_sub(1)
+        )));
+    }
+    Ok(())
+}
+
+/// Traces pixel `(x, y)` of the frame `opts` describes once more, recording its ray tree (the
+/// render itself never records, so it stays fast). The colour is the pixel's colour.
+pub fn trace_ray_tree(
+    scene: &Scene,
+    opts: &RenderOptions,
+    x: u32,
+    y: u32,
+) -> Result<(RayTree, Vec3)> {
+    check_options(opts)?;
+    check_pixel(x, y, opts)?;
+    let ray = scene
+        .camera
+        .generate_ray(Camera::pixel_point(x, y, opts.width, opts.height));
+    match opts.tracer {
+        Tracer::Reference => {
+            let mut tree = RayTree::new();
+            let sample =
+                ReferenceTracer::new(scene, opts.shade).trace_primary(&ray, Some(&mut tree));
+            Ok((tree, sample.color))
+        }
+        Tracer::Packet => {
+            let geometry = Geometry::from_scene(scene);
+            let (color, tree) = crate::wavefront::trace_pixel_tree(scene, &geometry, opts, x, y);
+            Ok((tree, color))
+        }
+    }
 }

@@ -21,10 +21,12 @@ use rayon::prelude::*;
 
 use crate::geometry::Geometry;
 use crate::math::Vec3;
-use crate::raytree::RayTree;
+use crate::raytree::{RayTree, SegmentKind};
+use crate::render::Progress;
 use crate::render::{Frame, RenderOptions};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
+use crate::stats::RayCounts;
 use queue::RayQueue;
 use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 
@@ -38,11 +40,14 @@ pub struct Context<'s> {
     pub opts: &'s ShadeOptions,
 }
 
-/// The part of the frame a band writes: colour, depth and normal of its pixels.
+/// What a band writes: colour, depth and normal of its pixels, the rays it cast, and (for a
+/// single traced pixel) its ray tree.
 pub struct BandOutput<'f> {
     pub color: &'f mut [Vec3],
     pub depth: &'f mut [f32],
     pub normal: &'f mut [Vec3],
+    pub rays: RayCounts,
+    pub tree: Option<&'f mut RayTree>,
 }
 
 /// A rectangle of pixels to render: columns `0..width` of rows `y0..y0 + rows` of a
@@ -65,9 +70,15 @@ pub struct Arenas {
     scratch: Bump,
 }
 
-/// Renders `scene` with the packet tracer, bands of rows in parallel. The bytes do not depend
-/// on the thread count: each pixel is computed by exactly one band, in a fixed order.
-pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -> Frame {
+/// Renders `scene` with the packet tracer, bands of rows in parallel, reporting finished rows
+/// to `progress`. The bytes do not depend on the thread count: each pixel is computed by exactly
+/// one band, in a fixed order.
+pub fn render_packet(
+    scene: &Scene,
+    geometry: &Geometry,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Frame {
     let (w, h) = (opts.width, opts.height);
     let mut frame = Frame::new(w, h);
     let ctx = Context {
@@ -76,13 +87,13 @@ pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -
         opts: &opts.shade,
     };
     let band_len = (w * BAND_ROWS) as usize;
-    frame
+    frame.rays = frame
         .color
         .par_chunks_mut(band_len)
         .zip(frame.depth.par_chunks_mut(band_len))
         .zip(frame.normal.par_chunks_mut(band_len))
         .enumerate()
-        .for_each_init(Arenas::default, |arenas, (i, ((color, depth), normal))| {
+        .map_init(Arenas::default, |arenas, (i, ((color, depth), normal))| {
             let y0 = i as u32 * BAND_ROWS;
             let band = Band {
                 x0: 0,
@@ -96,13 +107,19 @@ pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -
                 color,
                 depth,
                 normal,
+                rays: RayCounts::default(),
+                tree: None,
             };
-            render_band(&ctx, band, &mut out, arenas, None);
-        });
+            render_band(&ctx, band, &mut out, arenas);
+            progress(band.rows);
+            out.rays
+        })
+        .reduce(RayCounts::default, RayCounts::merged);
     frame
 }
 
-/// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree.
+/// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree; returns the
+/// pixel's colour and the tree.
 pub fn trace_pixel_tree(
     scene: &Scene,
     geometry: &Geometry,
@@ -124,30 +141,20 @@ pub fn trace_pixel_tree(
         image_height: opts.height,
     };
     let (mut color, mut depth, mut normal) = ([Vec3::ZERO], [f32::INFINITY], [Vec3::ZERO]);
+    let mut tree = RayTree::default();
     let mut out = BandOutput {
         color: &mut color,
         depth: &mut depth,
         normal: &mut normal,
+        rays: RayCounts::default(),
+        tree: Some(&mut tree),
     };
-    let mut tree = RayTree::default();
-    render_band(
-        &ctx,
-        band,
-        &mut out,
-        &mut Arenas::default(),
-        Some(&mut tree),
-    );
+    render_band(&ctx, band, &mut out, &mut Arenas::default());
     (color[0], tree)
 }
 
 /// The per-band driver: camera rays, then bounce after bounce until no ray is left.
-fn render_band(
-    ctx: &Context<'_>,
-    band: Band,
-    out: &mut BandOutput<'_>,
-    arenas: &mut Arenas,
-    mut tree: Option<&mut RayTree>,
-) {
+fn render_band(ctx: &Context<'_>, band: Band, out: &mut BandOutput<'_>, arenas: &mut Arenas) {
     let Arenas { even, odd, scratch } = arenas;
     even.reset();
     odd.reset();
@@ -156,13 +163,13 @@ fn render_band(
     let mut bounce = 0;
     // Two bounces per turn so each queue's arena is named: even bounces read `even`, odd `odd`.
     loop {
-        let next = run_bounce(ctx, bounce, rays, odd, scratch, out, tree.as_deref_mut());
+        let next = run_bounce(ctx, bounce, rays, odd, scratch, out);
         even.reset();
         if next.is_empty() {
             break;
         }
         bounce += 1;
-        rays = run_bounce(ctx, bounce, next, even, scratch, out, tree.as_deref_mut());
+        rays = run_bounce(ctx, bounce, next, even, scratch, out);
         odd.reset();
         if rays.is_empty() {
             break;
@@ -180,7 +187,6 @@ fn run_bounce<'n>(
     next_arena: &'n Bump,
     scratch: &mut Bump,
     out: &mut BandOutput<'_>,
-    mut tree: Option<&mut RayTree>,
 ) -> RayQueue<'n> {
     scratch.reset();
     let tmin = if bounce == 0 {
@@ -206,7 +212,12 @@ fn run_bounce<'n>(
         rays,
         hits,
     };
-    shade_hits(ctx, bounce, &mut q, out, tree.as_deref_mut());
-    trace_shadow_rays(ctx, &q.shadows, out, tree);
+    shade_hits(ctx, bounce, &mut q, out);
+    trace_shadow_rays(ctx, &q.shadows, out);
+    for kind in q.rays.kind.iter() {
+        out.rays.count(*kind, bounce);
+    }
+    out.rays
+        .count_many(SegmentKind::Shadow, bounce, q.shadows.len() as u64);
     q.next
 }

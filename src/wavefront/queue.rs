@@ -171,6 +171,8 @@ pub struct ShadowQueue<'b> {
     pub pixel: BVec<'b, u32>,
     /// What reaching the light adds to the pixel (throughput times the light's Phong term).
     pub contribution: BVec<'b, Vec3>,
+    /// Which light of the scene the ray goes to.
+    pub light: BVec<'b, u32>,
     /// The ray-tree segment of the ray being shaded, or [`NO_NODE`].
     pub parent: BVec<'b, u32>,
 }
@@ -188,17 +190,19 @@ impl<'b> ShadowQueue<'b> {
             max_t: BVec::with_capacity_in(n, arena),
             pixel: BVec::with_capacity_in(n, arena),
             contribution: BVec::with_capacity_in(n, arena),
+            light: BVec::with_capacity_in(n, arena),
             parent: BVec::with_capacity_in(n, arena),
         }
     }
 
-    /// Queues a shadow ray.
+    /// Queues a shadow ray towards light number `light`.
     pub fn push_shadow(
         &mut self,
         ray: &Ray,
         max_t: f32,
         pixel: u32,
         contribution: Vec3,
+        light: u32,
         parent: u32,
     ) {
         self.ox.push(ray.origin.x);
@@ -210,6 +214,7 @@ impl<'b> ShadowQueue<'b> {
         self.max_t.push(max_t);
         self.pixel.push(pixel);
         self.contribution.push(contribution);
+        self.light.push(light);
         self.parent.push(parent);
     }
 
