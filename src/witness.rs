@@ -217,11 +217,15 @@ fn framing(
     (look_at, dist)
 }
 
-/// The object tree without the planes that a viewer at `eye` sees from behind (on the side
-/// their normal points away from); everything else, ids included, is kept.
+/// The object tree without the planes and lone triangles (walls, mirrors) that a viewer at
+/// `eye` sees from behind (on the side their normal points away from), so the witness can look
+/// into a room; meshes and everything else, ids included, are kept.
 pub fn cutaway(obj: &Object, eye: Vec3) -> Object {
     match obj {
         Object::Plane { normal, offset, .. } if normal.dot(eye) < *offset => {
+            Object::Group(Vec::new())
+        }
+        Object::Triangle { v, .. } if (v[1] - v[0]).cross(v[2] - v[0]).dot(eye - v[0]) < 0.0 => {
             Object::Group(Vec::new())
         }
         Object::Group(children) => {
