@@ -360,6 +360,7 @@ pub fn execute(cmd: Command) -> Result<()> {
         return Ok(());
     }
     let mut rays = RayCounts::default();
+    let (mut accel, mut bounce_time) = (None, Vec::new());
     if !outputs.is_empty() {
         let t1 = Instant::now();
         let bar = RowBar::new("render", h);
@@ -378,6 +379,8 @@ pub fn execute(cmd: Command) -> Result<()> {
         }
         phases.push(("write", t2.elapsed()));
         rays = frame.rays;
+        accel = frame.accel;
+        bounce_time = frame.bounce_time;
     }
     if let Some((x, y, json)) = &cmd.ray_tree {
         let t3 = Instant::now();
@@ -399,6 +402,8 @@ pub fn execute(cmd: Command) -> Result<()> {
             rays,
             phases,
             peak_kib: peak_memory_kib(),
+            accel,
+            bounce_time,
         };
         eprint!("{}", report.human());
         eprintln!("{}", report.line());

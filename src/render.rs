@@ -5,6 +5,8 @@
 //! optional [`Progress`] hook (the CLI's progress bar); [`trace_ray_tree`] traces one pixel
 //! again and records its ray tree.
 
+use std::time::{Duration, Instant};
+
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
@@ -89,6 +91,21 @@ pub struct Frame {
     pub normal: Vec<Vec3>,
     /// The rays cast to make the frame, by kind and bounce.
     pub rays: RayCounts,
+    /// Packet tracer: the acceleration structure it built.
+    pub accel: Option<AccelStats>,
+    /// Packet tracer: time spent on each bounce, summed over worker threads.
+    pub bounce_time: Vec<Duration>,
+}
+
+/// What building the packet tracer's geometry cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelStats {
+    /// Flattening the scene to SoA arrays and building the BVH.
+    pub build: Duration,
+    /// BVH nodes.
+    pub nodes: usize,
+    /// Primitives in the BVH (planes stay outside).
+    pub bounded: usize,
 }
 
 /// Told how many image rows a render has just finished; called from worker threads, so it
@@ -106,6 +123,8 @@ impl Frame {
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
             rays: RayCounts::default(),
+            accel: None,
+            bounce_time: Vec::new(),
         }
     }
 }
@@ -159,8 +178,16 @@ pub fn render_with_progress(
     match opts.tracer {
         Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
         Tracer::Packet => {
+            let t0 = Instant::now();
             let geometry = Geometry::from_scene(scene);
-            Ok(pool.install(|| render_packet(scene, &geometry, opts, progress)))
+            let accel = AccelStats {
+                build: t0.elapsed(),
+                nodes: geometry.bvh().nodes.len(),
+                bounded: geometry.len() - geometry.planes.len(),
+            };
+            let mut frame = pool.install(|| render_packet(scene, &geometry, opts, progress));
+            frame.accel = Some(accel);
+            Ok(frame)
         }
     }
 }

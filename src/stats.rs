@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 use std::time::Duration;
 
 use crate::raytree::SegmentKind;
+use crate::render::AccelStats;
 
 /// Rays cast by a tracer, by kind and by bounce. Tracers count into a local value per row (or
 /// per queue) and [`RayCounts::merge`] the results, so counting never contends between
@@ -108,6 +109,10 @@ pub struct StatsReport {
     pub phases: Vec<(&'static str, Duration)>,
     /// Peak resident memory, if known.
     pub peak_kib: Option<u64>,
+    /// Packet tracer: geometry and BVH build.
+    pub accel: Option<AccelStats>,
+    /// Packet tracer: time per bounce, summed over worker threads.
+    pub bounce_time: Vec<Duration>,
 }
 
 /// `1234567` as `1,234,567`.
@@ -191,6 +196,24 @@ impl StatsReport {
         if !bounces.is_empty() {
             let _ = writeln!(s, "  bounce   {}", bounces.join(" | "));
         }
+        if let Some(a) = &self.accel {
+            let _ = writeln!(
+                s,
+                "  bvh      {} nodes over {} primitives, built in {:.1} ms",
+                grouped(a.nodes as u64),
+                grouped(a.bounded as u64),
+                ms(a.build)
+            );
+        }
+        if !self.bounce_time.is_empty() {
+            let times: Vec<String> = self
+                .bounce_time
+                .iter()
+                .enumerate()
+                .map(|(b, d)| format!("{b}: {:.1} ms", ms(*d)))
+                .collect();
+            let _ = writeln!(s, "  per bounce (cpu) {}", times.join(" | "));
+        }
         match self.peak_kib {
             Some(k) => {
                 let _ = writeln!(s, "  memory   peak {:.1} MiB", k as f64 / 1024.0);
@@ -229,6 +252,18 @@ impl StatsReport {
             let _ = write!(s, " bounce{b}_rays={n}");
         }
         let _ = write!(s, " mrays_per_s={:.3}", self.mrays_per_second());
+        if let Some(a) = &self.accel {
+            let _ = write!(
+                s,
+                " bvh_nodes={} bvh_prims={} bvh_build_ms={:.3}",
+                a.nodes,
+                a.bounded,
+                ms(a.build)
+            );
+        }
+        for (b, d) in self.bounce_time.iter().enumerate() {
+            let _ = write!(s, " bounce{b}_cpu_ms={:.3}", ms(*d));
+        }
         if let Some(k) = self.peak_kib {
             let _ = write!(s, " peak_kib={k}");
         }

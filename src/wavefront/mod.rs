@@ -16,6 +16,8 @@
 pub mod queue;
 mod stages;
 
+use std::time::{Duration, Instant};
+
 use bumpalo::Bump;
 use rayon::prelude::*;
 
@@ -47,6 +49,8 @@ pub struct BandOutput<'f> {
     pub depth: &'f mut [f32],
     pub normal: &'f mut [Vec3],
     pub rays: RayCounts,
+    /// Time spent on each bounce.
+    pub bounce_time: Vec<Duration>,
     pub tree: Option<&'f mut RayTree>,
 }
 
@@ -87,7 +91,7 @@ pub fn render_packet(
         opts: &opts.shade,
     };
     let band_len = (w * BAND_ROWS) as usize;
-    frame.rays = frame
+    (frame.rays, frame.bounce_time) = frame
         .color
         .par_chunks_mut(band_len)
         .zip(frame.depth.par_chunks_mut(band_len))
@@ -108,13 +112,25 @@ pub fn render_packet(
                 depth,
                 normal,
                 rays: RayCounts::default(),
+                bounce_time: Vec::new(),
                 tree: None,
             };
             render_band(&ctx, band, &mut out, arenas);
             progress(band.rows);
-            out.rays
+            (out.rays, out.bounce_time)
         })
-        .reduce(RayCounts::default, RayCounts::merged);
+        .reduce(
+            Default::default,
+            |(rays_a, mut time_a), (rays_b, time_b)| {
+                if time_a.len() < time_b.len() {
+                    time_a.resize(time_b.len(), Duration::ZERO);
+                }
+                for (a, b) in time_a.iter_mut().zip(time_b) {
+                    *a += b;
+                }
+                (rays_a.merged(rays_b), time_a)
+            },
+        );
     frame
 }
 
@@ -147,6 +163,7 @@ pub fn trace_pixel_tree(
         depth: &mut depth,
         normal: &mut normal,
         rays: RayCounts::default(),
+        bounce_time: Vec::new(),
         tree: Some(&mut tree),
     };
     render_band(&ctx, band, &mut out, &mut Arenas::default());
@@ -188,6 +205,7 @@ fn run_bounce<'n>(
     scratch: &mut Bump,
     out: &mut BandOutput<'_>,
 ) -> RayQueue<'n> {
+    let start = Instant::now();
     scratch.reset();
     let tmin = if bounce == 0 {
         ctx.scene.camera.tmin()
@@ -219,5 +237,10 @@ fn run_bounce<'n>(
     }
     out.rays
         .count_many(SegmentKind::Shadow, bounce, q.shadows.len() as u64);
+    let b = bounce as usize;
+    if out.bounce_time.len() <= b {
+        out.bounce_time.resize(b + 1, Duration::ZERO);
+    }
+    out.bounce_time[b] += start.elapsed();
     q.next
 }
