@@ -166,6 +166,12 @@ pub fn lanes(a: F32x8) -> [f32; LANES] {
     a.to_array()
 }
 
+/// Sets lane `i` of `a` to `v`.
+#[inline(always)]
+pub fn set_lane_i32(a: &mut I32x8, i: usize, v: i32) {
+    a.as_mut_array()[i] = v;
+}
+
 /// The integer lanes as an array.
 #[inline(always)]
 pub fn lanes_i32(a: I32x8) -> [i32; LANES] {

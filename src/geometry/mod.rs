@@ -29,7 +29,7 @@ use crate::math::{Mat3, Mat4, Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::scene::{Object, Scene};
 use crate::shade::Hit;
-use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32};
+use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32, set_lane_i32};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 use std::ops::Range;
 
@@ -271,15 +271,23 @@ impl Geometry {
     /// are left untouched.
     pub fn closest_hit_packet(&self, rays: &RayPacket, hit: &mut HitPacket) {
         let HitPacket { t, prim } = hit;
-        let mut leaf = |range: Range<u32>, rays: &RayPacket, t: &mut F32x8| {
-            self.closest_in_packet(range, rays, t, prim);
-        };
         if self.bvh.is_empty() {
-            leaf(self.bounded_range(), rays, t);
+            self.closest_in_packet(self.bounded_range(), rays, t, prim);
         } else {
-            self.bvh.closest_packet(rays, t, &mut leaf);
+            self.bvh.closest_packet(
+                rays,
+                t,
+                prim,
+                |prim, range, rays, t| self.closest_in_packet(range, rays, t, prim),
+                |prim, range, lane, ray, tmin, t| {
+                    if let Some((ti, p)) = self.closest_in(range, ray, tmin, *t) {
+                        *t = ti;
+                        set_lane_i32(prim, lane, p as i32);
+                    }
+                },
+            );
         }
-        leaf(self.planes_range(), rays, t);
+        self.closest_in_packet(self.planes_range(), rays, t, prim);
     }
 
     /// The active lanes with something in `(tmin, tmax)`; stops as soon as every active lane is
@@ -289,7 +297,10 @@ impl Geometry {
         let mut occluded = if self.bvh.is_empty() {
             leaf(self.bounded_range(), rays)
         } else {
-            self.bvh.occluded_packet(rays, tmax, leaf)
+            self.bvh
+                .occluded_packet(rays, tmax, leaf, |range, ray, t0, t1| {
+                    self.occluded_in(range, ray, t0, t1)
+                })
         };
         let rest = !occluded & rays.active;
         if any(rest) && !self.planes.is_empty() {
