@@ -44,11 +44,27 @@ pub use error::{Error, Result};
 pub use render::{Frame, RenderOptions, Tracer, render};
 pub use scene::Scene;
 
-/// True when this CPU has the instruction sets the build was compiled for (AVX2 and FMA).
+/// True when this CPU (and OS) run what the build was compiled for: x86-64-v3's AVX, AVX2,
+/// FMA, BMI1 and BMI2. It asks CPUID itself: `is_x86_feature_detected!` answers "yes" at compile
+/// time in a build that enables these features, which is exactly when the question matters.
+#[inline(never)]
 pub fn cpu_supported() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        use std::arch::x86_64::{__cpuid, __cpuid_count, _xgetbv};
+        let bit = |word: u32, n: u32| (word >> n) & 1 == 1;
+        // Leaf 7 is read only if the CPU reports it.
+        if __cpuid(0).eax < 7 {
+            return false;
+        }
+        let leaf1 = __cpuid(1);
+        let leaf7 = __cpuid_count(7, 0);
+        let (osxsave, avx, fma) = (bit(leaf1.ecx, 27), bit(leaf1.ecx, 28), bit(leaf1.ecx, 12));
+        let (avx2, bmi1, bmi2) = (bit(leaf7.ebx, 5), bit(leaf7.ebx, 3), bit(leaf7.ebx, 8));
+        // The OS must save the YMM registers (XCR0 bits 1 and 2); XGETBV needs OSXSAVE.
+        // SAFETY: XGETBV is only executed when CPUID reports OSXSAVE.
+        let ymm_saved = osxsave && unsafe { _xgetbv(0) } & 6 == 6;
+        avx && avx2 && fma && bmi1 && bmi2 && ymm_saved
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
