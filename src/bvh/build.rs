@@ -1,189 +1,313 @@
 //! The binned SAH builder: primitive bounds in, a depth-first node array and the primitive
-//! order out. Each node is split at the best of 16 bin boundaries on each axis by the surface
-//! area heuristic, or made a leaf when that is cheaper (at most [`MAX_LEAF`] primitives). Every
-//! primitive carries a tag (its kind, opaque here): a leaf never mixes tags, so its primitives
-//! are one contiguous range of one SoA array once they are reordered.
+//! order out. Each node is split at the best of [`BINS`] bin boundaries on each axis by the
+//! surface area heuristic, or made a leaf when that is cheaper (at most [`MAX_LEAF`]
+//! primitives). Every primitive carries a tag (its kind, opaque here): a leaf never mixes tags,
+//! so its primitives are one contiguous range of one SoA array once they are reordered.
+//!
+//! Speed: the builder works on an array of 32-byte primitive references (bounds, id, tag) that
+//! it partitions in place, so every pass reads memory in order; one pass bins all three axes,
+//! children get their bounds from the bins and their centroid bounds from the partition pass,
+//! so no node ever re-scans its primitives for bounds (see PERF.md, "BVH build").
+
+use glam::Vec4;
 
 use super::{Aabb, Bvh, BvhNode, MAX_DEPTH};
 
 /// The most primitives a leaf holds.
-pub const MAX_LEAF: usize = 8;
-const BINS: usize = 16;
+pub const MAX_LEAF: usize = 4;
+/// Bins per axis.
+pub const BINS: usize = 16;
 /// Cost of visiting a node relative to intersecting one primitive.
 const TRAVERSAL_COST: f32 = 1.0;
+
+/// A primitive reference: bounds with the id in `min.w` and the tag in `max.w` (as bits).
+#[derive(Clone, Copy)]
+struct PrimRef {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl PrimRef {
+    #[inline(always)]
+    fn id(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+
+    #[inline(always)]
+    fn tag(&self) -> u32 {
+        self.max.w.to_bits()
+    }
+
+    /// Twice the centroid (the factor cancels out in binning).
+    #[inline(always)]
+    fn centroid2(&self) -> Vec4 {
+        self.min + self.max
+    }
+}
+
+/// Bounds as two `Vec4` (w ignored), for fast unions.
+#[derive(Clone, Copy)]
+struct Box4 {
+    min: Vec4,
+    max: Vec4,
+}
+
+impl Box4 {
+    const EMPTY: Box4 = Box4 {
+        min: Vec4::splat(f32::INFINITY),
+        max: Vec4::splat(f32::NEG_INFINITY),
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, min: Vec4, max: Vec4) {
+        self.min = self.min.min(min);
+        self.max = self.max.max(max);
+    }
+
+    #[inline(always)]
+    fn union(&self, o: &Box4) -> Box4 {
+        Box4 {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    #[inline(always)]
+    fn half_area(&self) -> f32 {
+        let d = (self.max - self.min).max(Vec4::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    fn aabb(&self) -> Aabb {
+        Aabb {
+            min: self.min.truncate(),
+            max: self.max.truncate(),
+        }
+    }
+}
 
 /// Builds a BVH over primitives with the given bounds and tags. Returns the tree and the
 /// primitive order: leaf ranges index into it.
 pub fn build(bounds: &[Aabb], tags: &[u8]) -> (Bvh, Vec<u32>) {
     let n = bounds.len();
+    let mut all = Box4::EMPTY;
+    let mut centroids = Box4::EMPTY;
+    let mut refs: Vec<PrimRef> = bounds
+        .iter()
+        .zip(tags)
+        .enumerate()
+        .map(|(i, (b, &tag))| {
+            let r = PrimRef {
+                min: b.min.extend(f32::from_bits(i as u32)),
+                max: b.max.extend(f32::from_bits(tag as u32)),
+            };
+            all.grow(r.min, r.max);
+            let c = r.centroid2();
+            centroids.grow(c, c);
+            r
+        })
+        .collect();
     let mut b = Builder {
-        centroid: bounds
-            .iter()
-            .map(Aabb::center)
-            .map(|c| c.to_array())
-            .collect(),
-        bounds,
-        tags,
-        order: (0..n as u32).collect(),
-        nodes: Vec::with_capacity(n),
+        nodes: Vec::with_capacity(n.max(1)),
     };
     if n > 0 {
-        b.node(0, n, 0);
+        b.node(&mut refs, 0, all, centroids, 0);
     }
-    (Bvh { nodes: b.nodes }, b.order)
+    let order = refs.iter().map(PrimRef::id).collect();
+    (Bvh { nodes: b.nodes }, order)
 }
 
-struct Builder<'a> {
-    bounds: &'a [Aabb],
-    centroid: Vec<[f32; 3]>,
-    tags: &'a [u8],
-    order: Vec<u32>,
+struct Builder {
     nodes: Vec<BvhNode>,
 }
 
-#[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
+/// The chosen split: axis, bin boundary, the two children's bounds, the left count and the
+/// SAH cost of the children (area-weighted counts).
+struct Split {
+    axis: usize,
+    boundary: usize,
+    left: Box4,
+    right: Box4,
+    left_count: usize,
+    cost: f32,
 }
 
-impl Builder<'_> {
-    /// Builds the node for `order[first..first + count]`; returns its index.
-    fn node(&mut self, first: usize, count: usize, depth: usize) -> u32 {
+impl Builder {
+    /// Builds the node over `refs` (which start at position `first` of the whole array);
+    /// `bounds` and `centroids` are theirs. Returns the node's index.
+    fn node(
+        &mut self,
+        refs: &mut [PrimRef],
+        first: usize,
+        bounds: Box4,
+        centroids: Box4,
+        depth: usize,
+    ) -> u32 {
         let index = self.nodes.len() as u32;
-        let range = &self.order[first..first + count];
-        let mut bounds = Aabb::EMPTY;
-        let mut cbounds = Aabb::EMPTY;
-        for &p in range {
-            bounds = bounds.union(&self.bounds[p as usize]);
-            cbounds.grow(self.centroid[p as usize].into());
-        }
+        let count = refs.len();
         self.nodes
-            .push(BvhNode::leaf(&bounds, first as u32, count as u32));
-        let mixed = range
-            .iter()
-            .any(|&p| self.tags[p as usize] != self.tags[range[0] as usize]);
-        let split = if count <= 1 && !mixed {
+            .push(BvhNode::leaf(&bounds.aabb(), first as u32, count as u32));
+        let mixed = refs.iter().any(|r| r.tag() != refs[0].tag());
+        if count <= 1 && !mixed {
+            return index;
+        }
+        let leaf_ok = count <= MAX_LEAF && !mixed;
+        let split = if depth >= MAX_DEPTH - 1 {
             None
         } else {
-            self.split(first, count, &bounds, &cbounds, mixed, depth)
+            best_split(refs, &centroids)
         };
-        if let Some(mid) = split {
-            let left = self.node(first, mid - first, depth + 1);
-            debug_assert_eq!(left, index + 1);
-            let right = self.node(mid, first + count - mid, depth + 1);
-            self.nodes[index as usize] = BvhNode::interior(&bounds, right);
-        }
+        let (mid, left, right) = match split {
+            Some(s) => {
+                let area = bounds.half_area().max(f32::MIN_POSITIVE);
+                if leaf_ok && count as f32 <= TRAVERSAL_COST + s.cost / area {
+                    return index;
+                }
+                let (mid, cl, cr) = partition_by_bin(refs, &s, &centroids);
+                debug_assert_eq!(mid, s.left_count);
+                (mid, (s.left, cl), (s.right, cr))
+            }
+            None if leaf_ok => return index,
+            // No spatial split (every centroid coincides, or too deep): separate the kinds, or
+            // halve the range.
+            None => {
+                let mid = if mixed {
+                    partition_by_tag(refs)
+                } else if depth >= MAX_DEPTH - 1 {
+                    return index;
+                } else {
+                    count / 2
+                };
+                let (l, r) = refs.split_at(mid);
+                (mid, bounds_of(l), bounds_of(r))
+            }
+        };
+        let (left_refs, right_refs) = refs.split_at_mut(mid);
+        let l = self.node(left_refs, first, left.0, left.1, depth + 1);
+        debug_assert_eq!(l, index + 1);
+        let r = self.node(right_refs, first + mid, right.0, right.1, depth + 1);
+        self.nodes[index as usize] = BvhNode::interior(&bounds.aabb(), r);
         index
     }
+}
 
-    /// Partitions `order[first..first + count]` and returns the split position, or `None` to
-    /// make a leaf.
-    fn split(
-        &mut self,
-        first: usize,
-        count: usize,
-        bounds: &Aabb,
-        cbounds: &Aabb,
-        mixed: bool,
-        depth: usize,
-    ) -> Option<usize> {
-        let leaf_ok = count <= MAX_LEAF && !mixed;
-        if depth >= MAX_DEPTH - 1 {
-            // Too deep: only a tag split is allowed, else a (possibly large) leaf.
-            return mixed.then(|| self.partition_by_tag(first, count));
-        }
-        let extent = cbounds.max - cbounds.min;
-        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin boundary)
+/// Bounds and centroid bounds of some references.
+fn bounds_of(refs: &[PrimRef]) -> (Box4, Box4) {
+    let mut b = Box4::EMPTY;
+    let mut c = Box4::EMPTY;
+    for r in refs {
+        b.grow(r.min, r.max);
+        let cc = r.centroid2();
+        c.grow(cc, cc);
+    }
+    (b, c)
+}
+
+/// Per-axis bin scale: bins span the centroid bounds (zero-extent axes get scale 0).
+#[inline(always)]
+fn bin_scale(centroids: &Box4) -> Vec4 {
+    let extent = centroids.max - centroids.min;
+    let s = Vec4::splat(BINS as f32 * (1.0 - 1e-6)) / extent;
+    Vec4::select(extent.cmpgt(Vec4::ZERO), s, Vec4::ZERO)
+}
+
+/// The bin of a (doubled) centroid on each axis.
+#[inline(always)]
+fn bin_index(c: Vec4, lo: Vec4, scale: Vec4) -> [usize; 3] {
+    let b = ((c - lo) * scale).min(Vec4::splat((BINS - 1) as f32));
+    [b.x as usize, b.y as usize, b.z as usize]
+}
+
+/// Bins every reference on all three axes in one pass and returns the cheapest split by SAH.
+fn best_split(refs: &[PrimRef], centroids: &Box4) -> Option<Split> {
+    let scale = bin_scale(centroids);
+    let lo = centroids.min;
+    let mut counts = [[0u32; BINS]; 3];
+    let mut boxes = [[Box4::EMPTY; BINS]; 3];
+    for r in refs {
+        let bins = bin_index(r.centroid2(), lo, scale);
         for axis in 0..3 {
-            if extent[axis] <= 0.0 {
+            let b = bins[axis];
+            counts[axis][b] += 1;
+            boxes[axis][b].grow(r.min, r.max);
+        }
+    }
+    let mut best: Option<Split> = None;
+    for axis in 0..3 {
+        if scale[axis] == 0.0 {
+            continue;
+        }
+        // Sweep from the right: bounds and count of everything right of each boundary.
+        let mut right_box = [Box4::EMPTY; BINS];
+        let mut right_count = [0u32; BINS];
+        let mut acc = Box4::EMPTY;
+        let mut n = 0;
+        for i in (1..BINS).rev() {
+            acc = acc.union(&boxes[axis][i]);
+            n += counts[axis][i];
+            right_box[i] = acc;
+            right_count[i] = n;
+        }
+        let mut acc = Box4::EMPTY;
+        let mut n = 0;
+        for i in 1..BINS {
+            acc = acc.union(&boxes[axis][i - 1]);
+            n += counts[axis][i - 1];
+            if n == 0 || right_count[i] == 0 {
                 continue;
             }
-            let scale = BINS as f32 / extent[axis];
-            let lo = cbounds.min[axis];
-            let mut bins = [Bin {
-                bounds: Aabb::EMPTY,
-                count: 0,
-            }; BINS];
-            for &p in &self.order[first..first + count] {
-                let b = bin_of(self.centroid[p as usize][axis], lo, scale);
-                bins[b].count += 1;
-                bins[b].bounds = bins[b].bounds.union(&self.bounds[p as usize]);
-            }
-            // Sweep: area and count of everything right of each boundary.
-            let mut right_area = [0.0f32; BINS];
-            let mut right_count = [0u32; BINS];
-            let mut acc = Aabb::EMPTY;
-            let mut n = 0;
-            for i in (1..BINS).rev() {
-                acc = acc.union(&bins[i].bounds);
-                n += bins[i].count;
-                right_area[i] = acc.half_area();
-                right_count[i] = n;
-            }
-            let mut acc = Aabb::EMPTY;
-            let mut n = 0;
-            for i in 1..BINS {
-                acc = acc.union(&bins[i - 1].bounds);
-                n += bins[i - 1].count;
-                if n == 0 || right_count[i] == 0 {
-                    continue;
-                }
-                let cost = acc.half_area() * n as f32 + right_area[i] * right_count[i] as f32;
-                if best.is_none_or(|(c, _, _)| cost < c) {
-                    best = Some((cost, axis, i));
-                }
-            }
-        }
-        let parent_area = bounds.half_area().max(f32::MIN_POSITIVE);
-        let leaf_cost = count as f32;
-        match best {
-            Some((cost, axis, boundary)) => {
-                let split_cost = TRAVERSAL_COST + cost / parent_area;
-                if leaf_ok && leaf_cost <= split_cost {
-                    return None;
-                }
-                let lo = cbounds.min[axis];
-                let scale = BINS as f32 / extent[axis];
-                let centroid = &self.centroid;
-                let mid = partition(&mut self.order[first..first + count], |p| {
-                    bin_of(centroid[p as usize][axis], lo, scale) < boundary
+            let cost =
+                acc.half_area() * n as f32 + right_box[i].half_area() * right_count[i] as f32;
+            if best.as_ref().is_none_or(|b| cost < b.cost) {
+                best = Some(Split {
+                    axis,
+                    boundary: i,
+                    left: acc,
+                    right: right_box[i],
+                    left_count: n as usize,
+                    cost,
                 });
-                Some(first + mid)
             }
-            // All centroids coincide: no spatial split exists.
-            None if leaf_ok => None,
-            None if mixed => Some(self.partition_by_tag(first, count)),
-            None => Some(first + count / 2),
         }
     }
-
-    /// Moves the primitives tagged like the first one to the front; returns the split position.
-    fn partition_by_tag(&mut self, first: usize, count: usize) -> usize {
-        let tags = self.tags;
-        let tag = tags[self.order[first] as usize];
-        first
-            + partition(&mut self.order[first..first + count], |p| {
-                tags[p as usize] == tag
-            })
-    }
+    best
 }
 
-#[inline]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    (((c - lo) * scale) as usize).min(BINS - 1)
-}
-
-/// Stable-free in-place partition: elements satisfying `left` first; returns their count.
-fn partition(items: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+/// Partitions by the split's bin boundary (the same bin arithmetic as [`best_split`]); returns
+/// the split position and the two sides' centroid bounds, gathered on the way.
+fn partition_by_bin(refs: &mut [PrimRef], s: &Split, centroids: &Box4) -> (usize, Box4, Box4) {
+    let scale = bin_scale(centroids);
+    let lo = centroids.min;
+    let (mut cl, mut cr) = (Box4::EMPTY, Box4::EMPTY);
     let mut i = 0;
-    let mut j = items.len();
+    let mut j = refs.len();
+    // Each reference is examined once, at position i; one that goes right is swapped with the
+    // unexamined one at j - 1.
     while i < j {
-        if left(items[i]) {
+        let c = refs[i].centroid2();
+        if bin_index(c, lo, scale)[s.axis] < s.boundary {
+            cl.grow(c, c);
+            i += 1;
+        } else {
+            cr.grow(c, c);
+            j -= 1;
+            refs.swap(i, j);
+        }
+    }
+    (i, cl, cr)
+}
+
+/// Moves the references tagged like the first one to the front; returns their count.
+fn partition_by_tag(refs: &mut [PrimRef]) -> usize {
+    let tag = refs[0].tag();
+    let mut i = 0;
+    let mut j = refs.len();
+    while i < j {
+        if refs[i].tag() == tag {
             i += 1;
         } else {
             j -= 1;
-            items.swap(i, j);
+            refs.swap(i, j);
         }
     }
     i
