@@ -3,16 +3,23 @@
 //! `whitted` in place of `raytracer` (`whitted -input scene.txt -size 200 200 -output out.tga
 //! -shadows -bounces 10 -weight 0.01 -shade_back -gui`). Every option has a single-dash course
 //! spelling and a double-dash one; `_` and `-` are interchangeable inside names.
-//! `main` calls [`run`] and turns its error into exit code 2.
+//! `main` calls [`run`] and turns its error into exit code 2. [`execute`] runs the phases in
+//! order: parse, render (with a progress bar on a terminal), write, then the optional ray tree
+//! of one pixel and its witness picture, then `--stats`.
 
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
+use crate::math::Vec3;
 use crate::output;
+use crate::progress::RowBar;
+use crate::raytree::TreeSource;
 use crate::render::{self, RenderOptions, Tracer};
 use crate::scene::Scene;
+use crate::stats::{RayCounts, StatsReport, peak_memory_kib};
+use crate::witness::{self, WitnessPlace, WitnessSpec};
 
 /// The text of `whitted --help`.
 pub const HELP: &str = "\
@@ -20,6 +27,7 @@ whitted: a Whitted-style ray tracer for the MIT 6.837 scene format
 
 USAGE:
     whitted render SCENE -o OUT.png [OPTIONS]
+    whitted render SCENE --ray-tree X Y TREE.json [--ray-tree-image TREE.png] [OPTIONS]
     whitted -input SCENE -size W H -output OUT.tga [COURSE OPTIONS]   (the course's command lines)
 
 OUTPUT (format by extension: .png, .tga, .ppm; written atomically):
@@ -42,7 +50,32 @@ RENDERING (defaults in brackets):
     --tracer reference|packet  which tracer renders [packet]
     --threads N                worker threads [all cores]; output is identical for any N
     --max-pixels N             refuse larger images [67108864]
-    --stats                    print timings and ray counts to stderr
+    --stats                    print ray counts by kind and bounce, time per phase, Mrays/s
+                               and peak memory to stderr, then one `stats: key=value ...` line
+                               (a progress bar shows on stderr, only when it is a terminal,
+                               for renders over a second)
+
+RAY TREE (every ray one pixel spawns; -o is optional with it):
+    --ray-tree X Y FILE.json   trace pixel (X, Y) again after the render (x from the left, y from
+                               the top, as in the image) and write its tree: per segment the kind
+                               (eye, shadow, reflected, transmitted), parent, depth, weight,
+                               origin, end, primitive and material hit, light, blocked. Ends: the
+                               hit point; the point light; for a blocked shadow ray its nearest
+                               occluder; for escaping rays and shadow rays to directional lights,
+                               100 units along the ray
+    --ray-tree-image FILE.png  with --ray-tree: the scene seen by a witness camera, same size as
+                               the image, with the tree drawn over it: eye gray, shadow green
+                               (blocked: dashed dark green, X at the occluder), reflected red,
+                               transmitted blue, the main camera a white frustum, point lights
+                               yellow; parts hidden behind surfaces are drawn fainter; planes
+                               the witness sees from behind are left out (to look into rooms)
+    --witness-orbit YAW PITCH  default witness placement: it looks at the eye ray's first hit
+                               from the main camera's side turned YAW degrees about the vertical
+                               axis (positive: to the right) and raised PITCH degrees, as near as
+                               keeps the main camera and the tree's hits in view [40 20]
+    --witness-camera CX CY CZ LX LY LZ
+                               place the witness camera at C looking at L instead
+    --witness-angle DEG        witness field of view [60]
 
 COURSE OPTIONS (single dash, as in the handouts): -input -output -size -depth -normals -shadows
     -bounces -weight -shade_back -stats; -gui, -tessellation T P and -gouraud are accepted with a
@@ -60,6 +93,12 @@ pub struct Command {
     pub normals: Option<PathBuf>,
     pub render: RenderOptions,
     pub stats: bool,
+    /// `--ray-tree X Y FILE.json`: the pixel whose ray tree to write, and where.
+    pub ray_tree: Option<(u32, u32, PathBuf)>,
+    /// `--ray-tree-image FILE`: the witness picture of that tree.
+    pub ray_tree_image: Option<PathBuf>,
+    /// Where the witness camera of the picture stands.
+    pub witness: WitnessSpec,
     /// Notes for stderr about accepted-but-inert options.
     pub notes: Vec<String>,
 }
@@ -131,6 +170,9 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
         normals: None,
         render: RenderOptions::default(),
         stats: false,
+        ray_tree: None,
+        ray_tree_image: None,
+        witness: WitnessSpec::default(),
         notes: Vec::new(),
     };
     // The course's command lines reproduce the handout images, which clamp the specular term
@@ -189,6 +231,40 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
             "threads" => cmd.render.threads = number(opt, it.next(), "a thread count")?,
             "max_pixels" => cmd.render.max_pixels = number(opt, it.next(), "a pixel count")?,
             "stats" => cmd.stats = true,
+            "ray_tree" => {
+                let x = number(opt, it.next(), "a pixel column X")?;
+                let y = number(opt, it.next(), "a pixel row Y")?;
+                cmd.ray_tree = Some((x, y, path(opt, it.next())?));
+            }
+            "ray_tree_image" => cmd.ray_tree_image = Some(path(opt, it.next())?),
+            "witness_orbit" => {
+                let yaw_deg = finite(opt, it.next(), "a yaw angle in degrees")?;
+                let pitch_deg = finite(opt, it.next(), "a pitch angle in degrees")?;
+                cmd.witness.place = WitnessPlace::Orbit { yaw_deg, pitch_deg };
+            }
+            "witness_camera" => {
+                let mut v = [0.0f32; 6];
+                for (k, what) in ["CX", "CY", "CZ", "LX", "LY", "LZ"].iter().enumerate() {
+                    v[k] = finite(opt, it.next(), &format!("coordinate {what}"))?;
+                }
+                let center = Vec3::new(v[0], v[1], v[2]);
+                let look_at = Vec3::new(v[3], v[4], v[5]);
+                if center == look_at {
+                    return Err(Error::Usage(format!(
+                        "option {opt}: expected a look-at point different from the position"
+                    )));
+                }
+                cmd.witness.place = WitnessPlace::At { center, look_at };
+            }
+            "witness_angle" => {
+                let a = finite(opt, it.next(), "a field of view in degrees")?;
+                if !(a > 0.0 && a < 180.0) {
+                    return Err(Error::Usage(format!(
+                        "option {opt}: expected a field of view between 0 and 180 degrees, found {a}"
+                    )));
+                }
+                cmd.witness.angle_deg = a;
+            }
             "gui" | "gouraud" => cmd.notes.push(format!(
                 "note: {opt} ignored: whitted has no OpenGL preview"
             )),
@@ -225,20 +301,43 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
             "expected a scene file: -input SCENE".to_string()
         })
     })?;
-    if modern && cmd.output.is_none() && cmd.depth.is_none() && cmd.normals.is_none() {
+    if modern
+        && cmd.output.is_none()
+        && cmd.depth.is_none()
+        && cmd.normals.is_none()
+        && cmd.ray_tree.is_none()
+    {
         return Err(Error::Usage(
-            "expected an output file: -o OUT.png (or --depth/--normals)".to_string(),
+            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree)".to_string(),
         ));
+    }
+    if cmd.ray_tree_image.is_some() && cmd.ray_tree.is_none() {
+        return Err(Error::Usage(
+            "option --ray-tree-image needs --ray-tree X Y FILE.json to say which pixel".to_string(),
+        ));
+    }
+    if let Some((x, y, _)) = &cmd.ray_tree {
+        render::check_pixel(*x, *y, &cmd.render)
+            .map_err(|e| Error::Usage(format!("option --ray-tree: {}", usage_text(e))))?;
     }
     Ok(cmd)
 }
 
-/// Loads the scene, renders it and writes the requested images.
+/// The message of a usage error without the `--help` hint (it is added once, outside).
+fn usage_text(e: Error) -> String {
+    match e {
+        Error::Usage(msg) => msg,
+        e => e.to_string(),
+    }
+}
+
+/// Loads the scene, renders it and writes the requested images, ray tree and statistics.
 pub fn execute(cmd: Command) -> Result<()> {
     for note in &cmd.notes {
         eprintln!("{note}");
     }
     render::check_options(&cmd.render)?;
+    let (w, h) = (cmd.render.width, cmd.render.height);
     let outputs: Vec<&Path> = cmd
         .output
         .iter()
@@ -246,46 +345,106 @@ pub fn execute(cmd: Command) -> Result<()> {
         .chain(cmd.normals.iter())
         .map(PathBuf::as_path)
         .collect();
-    for out in &outputs {
-        output::check_writable(out, cmd.render.width, cmd.render.height)?;
+    for out in outputs.iter().chain(cmd.ray_tree_image.as_deref().iter()) {
+        output::check_writable(out, w, h)?;
     }
+    if let Some((_, _, json)) = &cmd.ray_tree {
+        output::check_creatable(json, "write ray tree")?;
+    }
+    let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
     let scene = Scene::load(&cmd.scene)?;
-    render::check_scene(&scene, &cmd.scene)?;
-    let load_time = t0.elapsed();
-    if outputs.is_empty() {
+    phases.push(("parse", t0.elapsed()));
+    if outputs.is_empty() && cmd.ray_tree.is_none() {
         eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");
         return Ok(());
     }
-    let t1 = Instant::now();
-    let frame = render::render(&scene, &cmd.render)?;
-    let render_time = t1.elapsed();
-    if let Some(out) = &cmd.output {
-        output::write_image(&output::color_image(&frame), out)?;
+    let mut rays = RayCounts::default();
+    let (mut accel, mut bounce_time) = (None, Vec::new());
+    if !outputs.is_empty() {
+        let t1 = Instant::now();
+        let bar = RowBar::new("render", h);
+        let frame = render::render_with_progress(&scene, &cmd.render, &|rows| bar.rows_done(rows))?;
+        bar.finish();
+        phases.push(("render", t1.elapsed()));
+        let t2 = Instant::now();
+        if let Some(out) = &cmd.output {
+            output::write_image(&output::color_image(&frame), out)?;
+        }
+        if let Some((near, far, out)) = &cmd.depth {
+            output::write_image(&output::depth_image(&frame, *near, *far), out)?;
+        }
+        if let Some(out) = &cmd.normals {
+            output::write_image(&output::normal_image(&frame), out)?;
+        }
+        phases.push(("write", t2.elapsed()));
+        rays = frame.rays;
+        accel = frame.accel;
+        bounce_time = frame.bounce_time;
     }
-    if let Some((near, far, out)) = &cmd.depth {
-        output::write_image(&output::depth_image(&frame, *near, *far), out)?;
-    }
-    if let Some(out) = &cmd.normals {
-        output::write_image(&output::normal_image(&frame), out)?;
+    if let Some((x, y, json)) = &cmd.ray_tree {
+        let t3 = Instant::now();
+        write_ray_tree(&cmd, &scene, *x, *y, json)?;
+        phases.push(("ray_tree", t3.elapsed()));
     }
     if cmd.stats {
-        let pixels = frame.width as u64 * frame.height as u64;
-        eprintln!(
-            "scene: {} primitives, loaded in {:.1} ms\nrender: {}x{} with the {:?} tracer in {:.1} ms",
-            scene.primitive_count(),
-            load_time.as_secs_f64() * 1e3,
-            frame.width,
-            frame.height,
-            cmd.render.tracer,
-            render_time.as_secs_f64() * 1e3
-        );
-        eprintln!(
-            "stats: primitives={} load_ms={:.3} render_ms={:.3} pixels={pixels}",
-            scene.primitive_count(),
-            load_time.as_secs_f64() * 1e3,
-            render_time.as_secs_f64() * 1e3
-        );
+        let report = StatsReport {
+            scene: cmd.scene.display().to_string(),
+            primitives: scene.primitive_count(),
+            lights: scene.lights.len(),
+            width: w,
+            height: h,
+            tracer: cmd.render.tracer.name(),
+            threads: match cmd.render.threads {
+                0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+                n => n,
+            },
+            rays,
+            phases,
+            peak_kib: peak_memory_kib(),
+            accel,
+            bounce_time,
+        };
+        eprint!("{}", report.human());
+        eprintln!("{}", report.line());
     }
     Ok(())
+}
+
+/// Traces pixel `(x, y)` again, recording its ray tree; writes it as JSON to `json` and, when
+/// asked, renders the witness view and draws the tree over it.
+fn write_ray_tree(cmd: &Command, scene: &Scene, x: u32, y: u32, json: &Path) -> Result<()> {
+    let opts = &cmd.render;
+    let (tree, _) = render::trace_ray_tree(scene, opts, x, y)?;
+    let scene_name = cmd.scene.display().to_string();
+    let source = TreeSource {
+        scene: &scene_name,
+        tracer: opts.tracer.name(),
+        pixel: [x, y],
+        image_size: [opts.width, opts.height],
+    };
+    output::write_atomic_as(json, tree.to_json(&source).as_bytes(), "write ray tree")?;
+    let Some(image) = &cmd.ray_tree_image else {
+        return Ok(());
+    };
+    let camera =
+        witness::witness_camera(&scene.camera, &tree, opts.width, opts.height, &cmd.witness);
+    let witness_scene = Scene {
+        camera: camera.clone(),
+        root: witness::cutaway(&scene.root, camera.center),
+        ..scene.clone()
+    };
+    let bar = RowBar::new("witness", opts.height);
+    let frame = render::render_with_progress(&witness_scene, opts, &|rows| bar.rows_done(rows))?;
+    bar.finish();
+    let title = format!("ray tree of pixel ({x}, {y})");
+    let picture = witness::draw_ray_tree(
+        &frame,
+        &camera,
+        &scene.camera,
+        (opts.width, opts.height),
+        &tree,
+        &title,
+    );
+    output::write_image(&picture, image)
 }

@@ -13,10 +13,15 @@
 //!                          |  shade.rs and intersect/ hold the maths both tracers share
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
+//!
+//! one pixel again --trace_ray_tree--> raytree.rs: RayTree --> JSON
+//!                                        '--> witness.rs: witness camera render + overlay -> PNG
+//! stats.rs: RayCounts (filled by the tracers) + phase times -> --stats; progress.rs: the bar
 //! ```
 //!
 //! `main.rs` is a thin wrapper around [`cli::run`].
 
+pub mod bvh;
 pub mod cli;
 pub mod error;
 pub mod geometry;
@@ -24,13 +29,16 @@ pub mod intersect;
 pub mod math;
 pub mod output;
 pub mod packet;
+pub mod progress;
 pub mod raytree;
 pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod shade;
 pub mod simd;
+pub mod stats;
 pub mod wavefront;
+pub mod witness;
 
 pub use error::{Error, Result};
 pub use render::{Frame, RenderOptions, Tracer, render};

@@ -140,12 +140,18 @@ pub fn check_writable(path: &Path, width: u32, height: u32) -> Result<()> {
             path.display()
         )));
     }
+    check_creatable(path, "write image")
+}
+
+/// Checks that a file can be created beside `path` (so a later atomic write of it can
+/// succeed); `action` names the write in the error ("write image", "write ray tree").
+pub fn check_creatable(path: &Path, action: &'static str) -> Result<()> {
     let tmp = temp_path(path);
     let file = fs::OpenOptions::new()
         .write(true)
         .create_new(true)
         .open(&tmp)
-        .map_err(|e| Error::io(path, "write image", e))?;
+        .map_err(|e| Error::io(path, action, e))?;
     drop(file);
     fs::remove_file(&tmp).map_err(|e| Error::io(&tmp, "remove temporary file", e))?;
     Ok(())
@@ -170,6 +176,11 @@ pub fn write_image(img: &Rgb8, path: &Path) -> Result<()> {
 
 /// Writes `bytes` to `path` through a temporary file and a rename.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_as(path, bytes, "write image")
+}
+
+/// [`write_atomic`], naming the write `action` in errors ("write ray tree").
+pub fn write_atomic_as(path: &Path, bytes: &[u8], action: &'static str) -> Result<()> {
     let tmp = temp_path(path);
     let result = (|| {
         let mut file = fs::File::create(&tmp)?;
@@ -179,7 +190,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     })();
     if let Err(e) = result {
         let _ = fs::remove_file(&tmp);
-        return Err(Error::io(path, "write image", e));
+        return Err(Error::io(path, action, e));
     }
     Ok(())
 }

@@ -13,9 +13,10 @@
 
 use crate::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
 use crate::math::{Ray, Vec3, transform_normal};
-use crate::raytree::{RayTree, SegmentKind};
+use crate::raytree::{RayTree, SegmentId, SegmentKind};
 use crate::scene::{Object, Scene};
 use crate::shade::{self, EPSILON, Hit, ShadeOptions};
+use crate::stats::RayCounts;
 
 /// The closest hit of `ray` with `obj` in `(tmin, tmax)`.
 pub fn closest_hit(obj: &Object, ray: &Ray, tmin: f32, tmax: f32) -> Option<Hit> {
@@ -168,10 +169,7 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
     let mut light = Vec3::ONE;
     let mut tmin = EPSILON;
     while let Some(hit) = closest_hit(&scene.root, ray, tmin, max_t) {
-        let m = scene.materials[hit.material as usize]
-            .phong()
-            .expect("textures are rejected before rendering");
-        light *= m.transparent;
+        light *= scene.phong_at(hit.material, ray.at(hit.t)).transparent;
         if light == Vec3::ZERO {
             break;
         }
@@ -201,14 +199,27 @@ impl<'s> ReferenceTracer<'s> {
 
     /// Traces a primary ray, recording its tree into `tree` when given.
     pub fn trace_primary(&self, ray: &Ray, tree: Option<&mut RayTree>) -> PrimarySample {
-        let mut tree = tree;
+        self.trace_primary_counted(ray, tree, &mut RayCounts::default())
+    }
+
+    /// Traces a primary ray, adding every ray cast to `counts` and recording the ray tree
+    /// into `tree` when given (the tree also names each shadow ray's nearest occluder, which
+    /// costs a closest-hit query per shadow ray, so only the ray-tree pixel pays it).
+    pub fn trace_primary_counted(
+        &self,
+        ray: &Ray,
+        tree: Option<&mut RayTree>,
+        counts: &mut RayCounts,
+    ) -> PrimarySample {
+        let mut log = Log { tree, counts };
+        log.counts.count(SegmentKind::Eye, 0);
         let hit = closest_hit(
             &self.scene.root,
             ray,
             self.scene.camera.tmin(),
             f32::INFINITY,
         );
-        let color = self.shade(ray, hit, 0, 1.0, SegmentKind::Eye, None, &mut tree);
+        let color = self.shade(ray, hit, 0, 1.0, SegmentKind::Eye, None, &mut log);
         PrimarySample { color, hit }
     }
 
@@ -219,11 +230,12 @@ impl<'s> ReferenceTracer<'s> {
         bounce: u32,
         weight: f32,
         kind: SegmentKind,
-        parent: Option<usize>,
-        tree: &mut Option<&mut RayTree>,
+        parent: Option<SegmentId>,
+        log: &mut Log,
     ) -> Vec3 {
+        log.counts.count(kind, bounce);
         let hit = closest_hit(&self.scene.root, ray, EPSILON, f32::INFINITY);
-        self.shade(ray, hit, bounce, weight, kind, parent, tree)
+        self.shade(ray, hit, bounce, weight, kind, parent, log)
     }
 
     #[allow(clippy::too_many_arguments)] // reason: the recursion state of one ray, kept flat for reading
@@ -234,11 +246,12 @@ impl<'s> ReferenceTracer<'s> {
         bounce: u32,
         weight: f32,
         kind: SegmentKind,
-        parent: Option<usize>,
-        tree: &mut Option<&mut RayTree>,
+        parent: Option<SegmentId>,
+        log: &mut Log,
     ) -> Vec3 {
         let scene = self.scene;
-        let me = tree
+        let me = log
+            .tree
             .as_deref_mut()
             .map(|t| t.add_ray(kind, parent, ray, hit, bounce, weight));
         let Some(hit) = hit else {
@@ -248,16 +261,17 @@ impl<'s> ReferenceTracer<'s> {
             return Vec3::ZERO;
         };
         let mut color = shade::ambient(scene, &s);
-        for light in &scene.lights {
+        for (index, light) in scene.lights.iter().enumerate() {
             let Some(sample) = shade::light_sample(&s, ray.dir, light, &self.opts) else {
                 continue;
             };
             let visible = if self.opts.shadows {
-                let v = visibility(scene, &sample.shadow, sample.max_t, &self.opts);
-                if let (Some(t), Some(me)) = (tree.as_deref_mut(), me) {
-                    t.add_shadow(me, &sample.shadow, sample.max_t, v != Vec3::ONE);
+                log.counts.count(SegmentKind::Shadow, bounce);
+                if let (Some(t), Some(me)) = (log.tree.as_deref_mut(), me) {
+                    let occluder = closest_hit(&scene.root, &sample.shadow, EPSILON, sample.max_t);
+                    t.add_shadow(me, index as u32, &sample.shadow, sample.max_t, occluder);
                 }
-                v
+                visibility(scene, &sample.shadow, sample.max_t, &self.opts)
             } else {
                 Vec3::ONE
             };
@@ -273,7 +287,7 @@ impl<'s> ReferenceTracer<'s> {
                     m.weight,
                     SegmentKind::Reflected,
                     me,
-                    tree,
+                    log,
                 );
         }
         if let Some(r) = refracted {
@@ -284,9 +298,15 @@ impl<'s> ReferenceTracer<'s> {
                     r.weight,
                     SegmentKind::Transmitted,
                     me,
-                    tree,
+                    log,
                 );
         }
         color
     }
+}
+
+/// What tracing one pixel reports besides its colour: ray counts always, the tree when asked.
+struct Log<'a> {
+    tree: Option<&'a mut RayTree>,
+    counts: &'a mut RayCounts,
 }

@@ -1,16 +1,22 @@
 //! Whole-frame rendering: options, the choice of tracer, and the [`Frame`] they fill (colour,
-//! plus the primary hit's distance and normal for the depth and normal images). Rows are
-//! rendered in parallel with rayon; every pixel is computed independently, so the result does
-//! not depend on the thread count.
+//! plus the primary hit's distance and normal for the depth and normal images, and the rays
+//! cast). Rows are rendered in parallel with rayon; every pixel is computed independently, so
+//! the result does not depend on the thread count. A render reports finished rows to an
+//! optional [`Progress`] hook (the CLI's progress bar); [`trace_ray_tree`] traces one pixel
+//! again and records its ray tree.
+
+use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::math::Vec3;
+use crate::raytree::RayTree;
 use crate::reference::ReferenceTracer;
-use crate::scene::{Camera, Material, Object, Scene};
+use crate::scene::{Camera, Scene};
 use crate::shade::ShadeOptions;
+use crate::stats::RayCounts;
 use crate::wavefront::render_packet;
 
 /// The largest image the renderer accepts without `--max-pixels` (64 megapixels).
@@ -34,6 +40,14 @@ impl Tracer {
             "reference" => Some(Tracer::Reference),
             "packet" => Some(Tracer::Packet),
             _ => None,
+        }
+    }
+
+    /// The name `--tracer` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tracer::Reference => "reference",
+            Tracer::Packet => "packet",
         }
     }
 }
@@ -75,7 +89,28 @@ pub struct Frame {
     pub depth: Vec<f32>,
     /// Unit world normal of the first hit; zero where nothing was hit.
     pub normal: Vec<Vec3>,
+    /// The rays cast to make the frame, by kind and bounce.
+    pub rays: RayCounts,
+    /// Packet tracer: the acceleration structure it built.
+    pub accel: Option<AccelStats>,
+    /// Packet tracer: time spent on each bounce, summed over worker threads.
+    pub bounce_time: Vec<Duration>,
 }
+
+/// What building the packet tracer's geometry cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelStats {
+    /// Flattening the scene to SoA arrays and building the BVH.
+    pub build: Duration,
+    /// BVH nodes.
+    pub nodes: usize,
+    /// Primitives in the BVH (planes stay outside).
+    pub bounded: usize,
+}
+
+/// Told how many image rows a render has just finished; called from worker threads, so it
+/// must be cheap and thread-safe (the CLI's progress bar; `&|_| {}` for none).
+pub type Progress<'a> = &'a (dyn Fn(u32) + Sync);
 
 impl Frame {
     /// A black frame with no hits.
@@ -87,6 +122,9 @@ impl Frame {
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
+            rays: RayCounts::default(),
+            accel: None,
+            bounce_time: Vec::new(),
         }
     }
 }
@@ -121,69 +159,58 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
     Ok(())
 }
 
-/// Checks that the scene uses nothing the tracers cannot render yet.
-pub fn check_scene(scene: &Scene, path: &std::path::Path) -> Result<()> {
-    let mut used = vec![false; scene.materials.len()];
-    mark_materials(&scene.root, &mut used);
-    for (m, used) in scene.materials.iter().zip(used) {
-        if let (Material::Texture { kind, line, col }, true) = (m, used) {
-            return Err(Error::parse(
-                path,
-                *line,
-                *col,
-                format!(
-                    "{kind} solid textures are not supported yet (the material is used by an object)"
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn mark_materials(obj: &Object, used: &mut [bool]) {
-    match obj {
-        Object::Sphere { material, .. }
-        | Object::Plane { material, .. }
-        | Object::Triangle { material, .. }
-        | Object::Mesh { material, .. } => used[*material as usize] = true,
-        Object::Group(children) => children.iter().for_each(|c| mark_materials(c, used)),
-        Object::Transform(t) => mark_materials(&t.child, used),
-    }
-}
-
 /// Renders `scene` with `opts`.
 pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Frame> {
+    render_with_progress(scene, opts, &|_| {})
+}
+
+/// Renders `scene` with `opts`, reporting finished rows to `progress`.
+pub fn render_with_progress(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Result<Frame> {
     check_options(opts)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
         .build()
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
     match opts.tracer {
-        Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts))),
+        Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
         Tracer::Packet => {
+            let t0 = Instant::now();
             let geometry = Geometry::from_scene(scene);
-            Ok(pool.install(|| render_packet(scene, &geometry, opts)))
+            let accel = AccelStats {
+                build: t0.elapsed(),
+                nodes: geometry.bvh().nodes.len(),
+                bounded: geometry.len() - geometry.planes.len(),
+            };
+            let mut frame = pool.install(|| render_packet(scene, &geometry, opts, progress));
+            frame.accel = Some(accel);
+            Ok(frame)
         }
     }
 }
 
-/// Renders with the reference tracer, rows in parallel.
-pub fn render_reference(scene: &Scene, opts: &RenderOptions) -> Frame {
+/// Renders with the reference tracer, rows in parallel; each row counts its rays locally and
+/// the counts are summed at the end.
+pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Frame {
     let (w, h) = (opts.width, opts.height);
     let mut frame = Frame::new(w, h);
     let tracer = ReferenceTracer::new(scene, opts.shade);
-    frame
+    frame.rays = frame
         .color
         .par_chunks_mut(w as usize)
         .zip(frame.depth.par_chunks_mut(w as usize))
         .zip(frame.normal.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(y, ((color, depth), normal))| {
+        .map(|(y, ((color, depth), normal))| {
+            let mut rays = RayCounts::default();
             for x in 0..w {
                 let ray = scene
                     .camera
                     .generate_ray(Camera::pixel_point(x, y as u32, w, h));
-                let sample = tracer.trace_primary(&ray, None);
+                let sample = tracer.trace_primary_counted(&ray, None, &mut rays);
                 let i = x as usize;
                 color[i] = sample.color;
                 if let Some(hit) = sample.hit {
@@ -191,6 +218,51 @@ pub fn render_reference(scene: &Scene, opts: &RenderOptions) -> Frame {
                     normal[i] = hit.normal;
                 }
             }
-        });
+            progress(1);
+            rays
+        })
+        .reduce(RayCounts::default, RayCounts::merged);
     frame
+}
+
+/// Checks that pixel `(x, y)` (x from the left, y from the top) lies in the image of `opts`.
+pub fn check_pixel(x: u32, y: u32, opts: &RenderOptions) -> Result<()> {
+    if x >= opts.width || y >= opts.height {
+        return Err(Error::Usage(format!(
+            "pixel ({x}, {y}) is outside the {}x{} image: expected x in 0..={} and y in 0..={}",
+            opts.width,
+            opts.height,
+            opts.width.saturating_sub(1),
+            opts.height.saturating_sub(1)
+        )));
+    }
+    Ok(())
+}
+
+/// Traces pixel `(x, y)` of the frame `opts` describes once more, recording its ray tree (the
+/// render itself never records, so it stays fast). The colour is the pixel's colour.
+pub fn trace_ray_tree(
+    scene: &Scene,
+    opts: &RenderOptions,
+    x: u32,
+    y: u32,
+) -> Result<(RayTree, Vec3)> {
+    check_options(opts)?;
+    check_pixel(x, y, opts)?;
+    let ray = scene
+        .camera
+        .generate_ray(Camera::pixel_point(x, y, opts.width, opts.height));
+    match opts.tracer {
+        Tracer::Reference => {
+            let mut tree = RayTree::new();
+            let sample =
+                ReferenceTracer::new(scene, opts.shade).trace_primary(&ray, Some(&mut tree));
+            Ok((tree, sample.color))
+        }
+        Tracer::Packet => {
+            let geometry = Geometry::from_scene(scene);
+            let (color, tree) = crate::wavefront::trace_pixel_tree(scene, &geometry, opts, x, y);
+            Ok((tree, color))
+        }
+    }
 }

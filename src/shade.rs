@@ -78,11 +78,10 @@ pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Opti
     if !front && !opts.shade_back {
         return None;
     }
-    let material = *scene.materials[hit.material as usize]
-        .phong()
-        .expect("textures are rejected before rendering");
+    let point = ray.at(hit.t);
+    let material = scene.phong_at(hit.material, point);
     Some(Surface {
-        point: ray.at(hit.t),
+        point,
         normal: if front { hit.normal } else { -hit.normal },
         front,
         material,

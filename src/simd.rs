@@ -119,6 +119,12 @@ pub fn max(a: F32x8, b: F32x8) -> F32x8 {
     a.max(b)
 }
 
+/// Lane-wise `a * b + c`, fused (one rounding).
+#[inline(always)]
+pub fn mul_add(a: F32x8, b: F32x8, c: F32x8) -> F32x8 {
+    a.mul_add(b, c)
+}
+
 /// Lane-wise square root.
 #[inline(always)]
 pub fn sqrt(a: F32x8) -> F32x8 {
@@ -158,6 +164,12 @@ pub fn from_lanes(values: [f32; LANES]) -> F32x8 {
 #[inline(always)]
 pub fn lanes(a: F32x8) -> [f32; LANES] {
     a.to_array()
+}
+
+/// Sets lane `i` of `a` to `v`.
+#[inline(always)]
+pub fn set_lane_i32(a: &mut I32x8, i: usize, v: i32) {
+    a.as_mut_array()[i] = v;
 }
 
 /// The integer lanes as an array.

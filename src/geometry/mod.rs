@@ -12,10 +12,13 @@
 //!
 //! A hit names its primitive by a geometry index: triangles first, then spheres, transformed
 //! spheres and planes, each kind in its array order. [`Geometry::surface`] turns it back into a
-//! normal, a material and the scene id.
+//! normal, a material and the scene id. [`Geometry::build_bvh`] builds one BVH over all bounded
+//! primitives (planes are tested apart), reorders the arrays so each leaf is a contiguous range
+//! of one kind, and hands the BVH the leaf test as a closure over a range of geometry indices.
 
 pub mod soa;
 
+use crate::bvh::{self, Aabb, Bvh};
 use crate::intersect::sphere::{affine_point, affine_vector};
 use crate::intersect::{
     intersect_plane, intersect_plane_packet, intersect_sphere, intersect_sphere_packet,
@@ -26,8 +29,9 @@ use crate::math::{Mat3, Mat4, Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::scene::{Object, Scene};
 use crate::shade::Hit;
-use crate::simd::{F32x8, I32x8, Mask, all, mask_none, select, select_i32};
+use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32, set_lane_i32};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
+use std::ops::Range;
 
 /// The kinds of primitive, in geometry-index order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,6 +49,8 @@ pub struct Geometry {
     pub spheres: SphereSoa,
     pub transformed: TransformedSphereSoa,
     pub planes: PlaneSoa,
+    /// Over the bounded primitives; empty until [`Geometry::build_bvh`].
+    bvh: Bvh,
 }
 
 impl Geometry {
@@ -52,6 +58,7 @@ impl Geometry {
     pub fn from_scene(scene: &Scene) -> Geometry {
         let mut g = Geometry::default();
         flatten(&scene.root, &Mat4::IDENTITY, &Mat3::IDENTITY, true, &mut g);
+        g.build_bvh();
         g
     }
 
@@ -134,160 +141,336 @@ impl Geometry {
         }
     }
 
+    /// Builds the BVH over the bounded primitives (all but planes), reordering the SoA arrays
+    /// so that every leaf is one contiguous range of one of them. Queries use it from then on.
+    pub fn build_bvh(&mut self) {
+        let bounded = self.plane_base();
+        let mut bounds = Vec::with_capacity(bounded);
+        let mut tags = Vec::with_capacity(bounded);
+        for g in 0..bounded as u32 {
+            let (kind, _) = self.locate(g);
+            bounds.push(self.bounds(g));
+            tags.push(kind as u8);
+        }
+        let (mut bvh, order) = bvh::build::build(&bounds, &tags);
+        // New geometry index of each position of `order`, and each kind's new order.
+        let bases = [0, self.sphere_base(), self.transformed_base()];
+        let mut next = bases;
+        let mut orders: [Vec<u32>; 3] = Default::default();
+        let mut new_index = Vec::with_capacity(order.len());
+        for &g in &order {
+            let (kind, i) = self.locate(g);
+            let k = kind as usize;
+            new_index.push(next[k] as u32);
+            next[k] += 1;
+            orders[k].push(i as u32);
+        }
+        for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
+            node.first = new_index[node.first as usize];
+        }
+        self.triangles.permute(&orders[0]);
+        self.spheres.permute(&orders[1]);
+        self.transformed.permute(&orders[2]);
+        self.bvh = bvh;
+    }
+
+    /// The bounds of primitive `g` (planes have none: infinite box).
+    pub fn bounds(&self, g: u32) -> Aabb {
+        let (kind, i) = self.locate(g);
+        match kind {
+            PrimKind::Triangle => {
+                let (v0, e1, e2) = self.triangles.get(i);
+                let mut b = Aabb::EMPTY;
+                for p in [v0, v0 + e1, v0 + e2] {
+                    b.grow(p);
+                }
+                b
+            }
+            PrimKind::Sphere => {
+                let (c, r) = (self.spheres.center(i), self.spheres.radius[i]);
+                Aabb {
+                    min: c - Vec3::splat(r),
+                    max: c + Vec3::splat(r),
+                }
+            }
+            PrimKind::TransformedSphere => {
+                // The unit sphere under `world`: centre = translation, half extent along each
+                // axis = length of that row of the linear part.
+                let w = &self.transformed.world[i];
+                let c = Vec3::new(w[3], w[7], w[11]);
+                let h = Vec3::new(
+                    Vec3::new(w[0], w[1], w[2]).length(),
+                    Vec3::new(w[4], w[5], w[6]).length(),
+                    Vec3::new(w[8], w[9], w[10]).length(),
+                );
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            }
+            PrimKind::Plane => Aabb {
+                min: Vec3::NEG_INFINITY,
+                max: Vec3::INFINITY,
+            },
+        }
+    }
+
+    /// Checks the BVH against the primitives it was built over (see [`Bvh::validate`]).
+    pub fn validate_bvh(&self) -> Result<(), String> {
+        let (bounds, tags): (Vec<Aabb>, Vec<u8>) = self
+            .bounded_range()
+            .map(|g| (self.bounds(g), self.locate(g).0 as u8))
+            .unzip();
+        self.bvh.validate(&bounds, &tags)
+    }
+
+    /// The BVH (empty before [`Geometry::build_bvh`]).
+    pub fn bvh(&self) -> &Bvh {
+        &self.bvh
+    }
+
+    fn planes_range(&self) -> Range<u32> {
+        self.plane_base() as u32..self.len() as u32
+    }
+
+    fn bounded_range(&self) -> Range<u32> {
+        0..self.plane_base() as u32
+    }
+
     /// The closest hit of one ray in `(tmin, tmax)`: `(t, geometry index)`.
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
-        let mut best: Option<(f32, u32)> = None;
+        let mut best = None;
         let mut limit = tmax;
-        let mut take = |t: Option<f32>, prim: usize, limit: &mut f32| {
-            if let Some(t) = t {
-                *limit = t;
-                best = Some((t, prim as u32));
+        let mut leaf = |range: Range<u32>, limit: &mut f32| {
+            if let Some(hit) = self.closest_in(range, ray, tmin, *limit) {
+                *limit = hit.0;
+                best = Some(hit);
             }
         };
-        let tri = &self.triangles;
-        for i in 0..tri.len() {
-            let (v0, e1, e2) = tri.get(i);
-            take(
-                intersect_triangle(v0, e1, e2, ray, tmin, limit),
-                i,
-                &mut limit,
-            );
+        if self.bvh.is_empty() {
+            leaf(self.bounded_range(), &mut limit);
+        } else {
+            self.bvh.closest(ray, tmin, &mut limit, &mut leaf);
         }
-        let base = self.sphere_base();
-        for i in 0..self.spheres.len() {
-            let t = intersect_sphere(
-                self.spheres.center(i),
-                self.spheres.radius2[i],
-                ray,
-                tmin,
-                limit,
-            );
-            take(t, base + i, &mut limit);
-        }
-        let base = self.transformed_base();
-        for i in 0..self.transformed.len() {
-            let t = intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, limit);
-            take(t, base + i, &mut limit);
-        }
-        let base = self.plane_base();
-        for i in 0..self.planes.len() {
-            let t = intersect_plane(
-                self.planes.normal(i),
-                self.planes.offset[i],
-                ray,
-                tmin,
-                limit,
-            );
-            take(t, base + i, &mut limit);
-        }
+        leaf(self.planes_range(), &mut limit);
         best
     }
 
     /// True if anything lies on the ray in `(tmin, tmax)`.
     pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let tri = &self.triangles;
-        (0..tri.len()).any(|i| {
-            let (v0, e1, e2) = tri.get(i);
-            intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
-        }) || (0..self.spheres.len()).any(|i| {
-            intersect_sphere(
-                self.spheres.center(i),
-                self.spheres.radius2[i],
-                ray,
-                tmin,
-                tmax,
-            )
-            .is_some()
-        }) || (0..self.transformed.len()).any(|i| {
-            intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax).is_some()
-        }) || (0..self.planes.len()).any(|i| {
-            intersect_plane(
-                self.planes.normal(i),
-                self.planes.offset[i],
-                ray,
-                tmin,
-                tmax,
-            )
-            .is_some()
-        })
+        let leaf = |range: Range<u32>| self.occluded_in(range, ray, tmin, tmax);
+        let bounded = if self.bvh.is_empty() {
+            leaf(self.bounded_range())
+        } else {
+            self.bvh.occluded(ray, tmin, tmax, leaf)
+        };
+        bounded || leaf(self.planes_range())
     }
 
     /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
     /// are left untouched.
     pub fn closest_hit_packet(&self, rays: &RayPacket, hit: &mut HitPacket) {
-        let tri = &self.triangles;
-        for i in 0..tri.len() {
-            let (v0, e1, e2) = tri.get(i);
-            let (m, t) = intersect_triangle_packet(v0, e1, e2, rays, hit.t);
-            update(hit, m, t, i);
-        }
-        let base = self.sphere_base();
-        for i in 0..self.spheres.len() {
-            let (m, t) = intersect_sphere_packet(
-                self.spheres.center(i),
-                self.spheres.radius2[i],
+        let HitPacket { t, prim } = hit;
+        if self.bvh.is_empty() {
+            self.closest_in_packet(self.bounded_range(), rays, t, prim);
+        } else {
+            self.bvh.closest_packet(
                 rays,
-                hit.t,
+                t,
+                prim,
+                |prim, range, rays, t| self.closest_in_packet(range, rays, t, prim),
+                |prim, range, lane, ray, tmin, t| {
+                    if let Some((ti, p)) = self.closest_in(range, ray, tmin, *t) {
+                        *t = ti;
+                        set_lane_i32(prim, lane, p as i32);
+                    }
+                },
             );
-            update(hit, m, t, base + i);
         }
-        let base = self.transformed_base();
-        for i in 0..self.transformed.len() {
-            let (m, t) =
-                intersect_transformed_sphere_packet(&self.transformed.inverse(i), rays, hit.t);
-            update(hit, m, t, base + i);
-        }
-        let base = self.plane_base();
-        for i in 0..self.planes.len() {
-            let (m, t) =
-                intersect_plane_packet(self.planes.normal(i), self.planes.offset[i], rays, hit.t);
-            update(hit, m, t, base + i);
-        }
+        self.closest_in_packet(self.planes_range(), rays, t, prim);
     }
 
     /// The active lanes with something in `(tmin, tmax)`; stops as soon as every active lane is
     /// occluded.
     pub fn occluded_packet(&self, rays: &RayPacket, tmax: F32x8) -> Mask {
-        let mut occluded = mask_none();
-        let done = |occluded: Mask| all(occluded | !rays.active);
-        let tri = &self.triangles;
-        for i in 0..tri.len() {
-            let (v0, e1, e2) = tri.get(i);
-            occluded |= intersect_triangle_packet(v0, e1, e2, rays, tmax).0;
-            if done(occluded) {
-                return occluded;
-            }
-        }
-        for i in 0..self.spheres.len() {
-            let c = self.spheres.center(i);
-            occluded |= intersect_sphere_packet(c, self.spheres.radius2[i], rays, tmax).0;
-            if done(occluded) {
-                return occluded;
-            }
-        }
-        for i in 0..self.transformed.len() {
-            let inv = self.transformed.inverse(i);
-            occluded |= intersect_transformed_sphere_packet(&inv, rays, tmax).0;
-            if done(occluded) {
-                return occluded;
-            }
-        }
-        for i in 0..self.planes.len() {
-            let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-            occluded |= intersect_plane_packet(n, d, rays, tmax).0;
-            if done(occluded) {
-                return occluded;
-            }
+        let leaf = |range: Range<u32>, rays: &RayPacket| self.occluded_in_packet(range, rays, tmax);
+        let mut occluded = if self.bvh.is_empty() {
+            leaf(self.bounded_range(), rays)
+        } else {
+            self.bvh
+                .occluded_packet(rays, tmax, leaf, |range, ray, t0, t1| {
+                    self.occluded_in(range, ray, t0, t1)
+                })
+        };
+        let rest = !occluded & rays.active;
+        if any(rest) && !self.planes.is_empty() {
+            occluded |= leaf(
+                self.planes_range(),
+                &RayPacket {
+                    active: rest,
+                    ..*rays
+                },
+            );
         }
         occluded
     }
-}
 
-/// Records the hits `(m, t)` of primitive `prim` in the lanes of `m`.
-#[inline(always)]
-fn update(hit: &mut HitPacket, m: Mask, t: F32x8, prim: usize) {
-    hit.t = select(m, t, hit.t);
-    hit.prim = select_i32(m, I32x8::splat(prim as i32), hit.prim);
+    /// Calls `f(kind, index range in that kind's array, geometry index of the first)` for each
+    /// kind present in the geometry-index `range`.
+    #[inline(always)]
+    fn for_kinds(&self, range: Range<u32>, mut f: impl FnMut(PrimKind, Range<usize>, usize)) {
+        let bases = [
+            (PrimKind::Triangle, 0, self.sphere_base()),
+            (
+                PrimKind::Sphere,
+                self.sphere_base(),
+                self.transformed_base(),
+            ),
+            (
+                PrimKind::TransformedSphere,
+                self.transformed_base(),
+                self.plane_base(),
+            ),
+            (PrimKind::Plane, self.plane_base(), self.len()),
+        ];
+        let (lo, hi) = (range.start as usize, range.end as usize);
+        for (kind, start, end) in bases {
+            let (a, b) = (lo.max(start), hi.min(end));
+            if a < b {
+                f(kind, a - start..b - start, start);
+            }
+        }
+    }
+
+    /// Brute-force closest hit over a range of geometry indices.
+    fn closest_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
+        let mut best = None;
+        let mut limit = tmax;
+        self.for_kinds(range, |kind, idx, base| {
+            for i in idx {
+                let t = match kind {
+                    PrimKind::Triangle => {
+                        let (v0, e1, e2) = self.triangles.get(i);
+                        intersect_triangle(v0, e1, e2, ray, tmin, limit)
+                    }
+                    PrimKind::Sphere => {
+                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+                        intersect_sphere(c, r2, ray, tmin, limit)
+                    }
+                    PrimKind::TransformedSphere => {
+                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, limit)
+                    }
+                    PrimKind::Plane => {
+                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                        intersect_plane(n, d, ray, tmin, limit)
+                    }
+                };
+                if let Some(t) = t {
+                    limit = t;
+                    best = Some((t, (base + i) as u32));
+                }
+            }
+        });
+        best
+    }
+
+    /// Brute-force any hit over a range of geometry indices.
+    fn occluded_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        let mut hit = false;
+        self.for_kinds(range, |kind, mut idx, _| {
+            hit = hit
+                || match kind {
+                    PrimKind::Triangle => idx.any(|i| {
+                        let (v0, e1, e2) = self.triangles.get(i);
+                        intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
+                    }),
+                    PrimKind::Sphere => idx.any(|i| {
+                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+                        intersect_sphere(c, r2, ray, tmin, tmax).is_some()
+                    }),
+                    PrimKind::TransformedSphere => idx.any(|i| {
+                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax)
+                            .is_some()
+                    }),
+                    PrimKind::Plane => idx.any(|i| {
+                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                        intersect_plane(n, d, ray, tmin, tmax).is_some()
+                    }),
+                };
+        });
+        hit
+    }
+
+    /// Brute-force closest hits of a packet over a range of geometry indices.
+    #[inline(always)]
+    fn closest_in_packet(
+        &self,
+        range: Range<u32>,
+        rays: &RayPacket,
+        t: &mut F32x8,
+        prim: &mut I32x8,
+    ) {
+        self.for_kinds(range, |kind, idx, base| {
+            for i in idx {
+                let (m, ti) = match kind {
+                    PrimKind::Triangle => {
+                        let (v0, e1, e2) = self.triangles.get(i);
+                        intersect_triangle_packet(v0, e1, e2, rays, *t)
+                    }
+                    PrimKind::Sphere => {
+                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+                        intersect_sphere_packet(c, r2, rays, *t)
+                    }
+                    PrimKind::TransformedSphere => {
+                        intersect_transformed_sphere_packet(&self.transformed.inverse(i), rays, *t)
+                    }
+                    PrimKind::Plane => {
+                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                        intersect_plane_packet(n, d, rays, *t)
+                    }
+                };
+                *t = select(m, ti, *t);
+                *prim = select_i32(m, I32x8::splat((base + i) as i32), *prim);
+            }
+        });
+    }
+
+    /// Brute-force any hit of a packet over a range of geometry indices; stops once every
+    /// active lane is blocked.
+    #[inline(always)]
+    fn occluded_in_packet(&self, range: Range<u32>, rays: &RayPacket, tmax: F32x8) -> Mask {
+        let mut occluded = mask_none();
+        self.for_kinds(range, |kind, idx, _| {
+            for i in idx {
+                if all(occluded | !rays.active) {
+                    return;
+                }
+                occluded |= match kind {
+                    PrimKind::Triangle => {
+                        let (v0, e1, e2) = self.triangles.get(i);
+                        intersect_triangle_packet(v0, e1, e2, rays, tmax).0
+                    }
+                    PrimKind::Sphere => {
+                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+                        intersect_sphere_packet(c, r2, rays, tmax).0
+                    }
+                    PrimKind::TransformedSphere => {
+                        intersect_transformed_sphere_packet(
+                            &self.transformed.inverse(i),
+                            rays,
+                            tmax,
+                        )
+                        .0
+                    }
+                    PrimKind::Plane => {
+                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                        intersect_plane_packet(n, d, rays, tmax).0
+                    }
+                };
+            }
+        });
+        occluded
+    }
 }
 
 /// True if the linear part of `m` is a rotation times a uniform scale (maybe mirrored): spheres

@@ -20,6 +20,9 @@ pub struct Camera {
     pub direction: Vec3,
     pub up: Vec3,
     pub horizontal: Vec3,
+    /// Width of the screen square in world units: `size` (orthographic) or
+    /// `2 tan(angle / 2)` at distance 1 (perspective).
+    pub screen: f32,
 }
 
 /// Orthographic (`size` = world width of the screen) or perspective (`angle` = full field of
@@ -37,12 +40,17 @@ impl Camera {
         let direction = direction.normalize();
         let horizontal = direction.cross(up).normalize();
         let up = horizontal.cross(direction).normalize();
+        let screen = match kind {
+            Projection::Orthographic { size } => size,
+            Projection::Perspective { angle } => 2.0 * (angle * 0.5).tan(),
+        };
         Camera {
             kind,
             center,
             direction,
             up,
             horizontal,
+            screen,
         }
     }
 
@@ -59,15 +67,14 @@ impl Camera {
     pub fn generate_ray(&self, point: Vec2) -> Ray {
         let sx = point.x - 0.5;
         let sy = point.y - 0.5;
+        let (h, v) = (
+            self.horizontal * (sx * self.screen),
+            self.up * (sy * self.screen),
+        );
         match self.kind {
-            Projection::Orthographic { size } => {
-                let origin = self.center + self.horizontal * (sx * size) + self.up * (sy * size);
-                Ray::new(origin, self.direction)
-            }
-            Projection::Perspective { angle } => {
-                let half = 2.0 * (angle * 0.5).tan();
-                let dir = self.direction + self.horizontal * (sx * half) + self.up * (sy * half);
-                Ray::new(self.center, dir.normalize())
+            Projection::Orthographic { .. } => Ray::new(self.center + h + v, self.direction),
+            Projection::Perspective { .. } => {
+                Ray::new(self.center, (self.direction + h + v).normalize())
             }
         }
     }

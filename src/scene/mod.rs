@@ -12,12 +12,14 @@
 pub mod camera;
 pub mod obj;
 pub mod parse;
+pub mod texture;
 
 use std::path::Path;
 
 use crate::error::Result;
 use crate::math::{Mat3, Mat4, Vec3};
 pub use camera::{Camera, Projection};
+pub use texture::{Texture, TextureKind};
 
 /// A parsed scene, ready to render.
 #[derive(Clone, Debug)]
@@ -127,27 +129,12 @@ impl Default for Phong {
     }
 }
 
-/// A material: plain Phong, or a solid texture choosing between two other materials.
+/// A material: plain Phong, or a solid texture choosing between two other materials (see
+/// [`texture`]); [`Scene::phong_at`] resolves either to Phong parameters at a point.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Material {
     Phong(Phong),
-    /// A solid texture (`Checkerboard`, `Noise`, `Marble`, `Wood`). Rendering one is not
-    /// supported yet; `line`/`col` locate it in the scene file for that error.
-    Texture {
-        kind: &'static str,
-        line: usize,
-        col: usize,
-    },
-}
-
-impl Material {
-    /// The Phong parameters, if this is a plain material.
-    pub fn phong(&self) -> Option<&Phong> {
-        match self {
-            Material::Phong(p) => Some(p),
-            Material::Texture { .. } => None,
-        }
-    }
+    Texture(Texture),
 }
 
 /// A node of the object tree. Primitives carry the index of their material and an `id`: their

@@ -36,12 +36,16 @@
 use std::path::{Path, PathBuf};
 
 use super::obj;
-use super::{Camera, Light, Material, Object, Phong, Projection, Scene, Transformed};
+use super::{
+    Camera, Light, Material, Object, Phong, Projection, Scene, Texture, TextureKind, Transformed,
+};
 use crate::error::{Error, Result};
 use crate::math::{Mat4, Vec3};
 
 /// The deepest nesting of groups and transforms the parser accepts.
 pub const MAX_NESTING: usize = 256;
+/// The most octaves a noise texture may ask for (more would add nothing visible in f32).
+pub const MAX_OCTAVES: usize = 24;
 
 /// Reads and parses a scene file.
 pub fn parse_file(path: &Path) -> Result<Scene> {
@@ -364,6 +368,17 @@ impl<'a> Parser<'a> {
                 ));
             }
         }
+        if let Some(start) = texture_cycle(&materials) {
+            let tok = self
+                .material_refs
+                .iter()
+                .find(|(i, _)| *i as usize == start)
+                .map(|(_, t)| *t);
+            return Err(self.error_at(
+                tok.as_ref(),
+                format!("expected textures that end in plain materials, found material {start} referring back to itself"),
+            ));
+        }
         if uses_material(&root, NO_MATERIAL) {
             let default = materials.len() as u32;
             materials.push(Material::Phong(Phong::default()));
@@ -647,42 +662,74 @@ impl<'a> Parser<'a> {
 
     fn texture(&mut self) -> Result<Material> {
         let kind = self.next("a texture")?;
-        let name: &'static str = match kind.text {
-            "Checkerboard" => "Checkerboard",
-            "Noise" => "Noise",
-            "Marble" => "Marble",
-            _ => "Wood",
-        };
         self.keyword("{")?;
         self.keyword("Transform")?;
         self.keyword("{")?;
+        let mut matrix = Mat4::IDENTITY;
         while self.peek().is_some_and(|t| t.text != "}") {
-            self.xform()?;
+            matrix *= self.xform()?;
         }
         self.keyword("}")?;
-        for _ in 0..2 {
+        let mut pair = [0u32; 2];
+        for m in pair.iter_mut() {
             self.keyword("materialIndex")?;
             let at = self.peek();
             let i = self.count("materialIndex")?;
-            self.material_refs
-                .push((i.min(u32::MAX as usize - 1) as u32, at.unwrap()));
+            *m = i.min(NO_MATERIAL as usize - 1) as u32;
+            self.material_refs.push((*m, at.unwrap()));
         }
-        if name != "Checkerboard" {
+        let mut octaves = || -> Result<u32> {
             self.keyword("octaves")?;
-            self.count("octaves")?;
-        }
-        if name == "Marble" || name == "Wood" {
-            self.keyword("frequency")?;
-            self.number("frequency")?;
-            self.keyword("amplitude")?;
-            self.number("amplitude")?;
-        }
+            let at = self.peek();
+            let k = self.count("octaves")?;
+            if k > MAX_OCTAVES {
+                return Err(self.error_at(
+                    at.as_ref(),
+                    format!("expected at most {MAX_OCTAVES} octaves, found {k}"),
+                ));
+            }
+            Ok(k as u32)
+        };
+        let kind = match kind.text {
+            "Checkerboard" => TextureKind::Checkerboard,
+            "Noise" => TextureKind::Noise {
+                octaves: octaves()?,
+            },
+            marble_or_wood => {
+                let octaves = octaves()?;
+                self.keyword("frequency")?;
+                let frequency = self.number("frequency")?;
+                self.keyword("amplitude")?;
+                let amplitude = self.number("amplitude")?;
+                if marble_or_wood == "Marble" {
+                    TextureKind::Marble {
+                        octaves,
+                        frequency,
+                        amplitude,
+                    }
+                } else {
+                    TextureKind::Wood {
+                        octaves,
+                        frequency,
+                        amplitude,
+                    }
+                }
+            }
+        };
         self.keyword("}")?;
-        Ok(Material::Texture {
-            kind: name,
-            line: kind.line,
-            col: kind.col,
-        })
+        let det = matrix.determinant();
+        if !(det.abs() > 0.0 && det.is_finite()) {
+            return Err(self.error_at(
+                Some(&kind_token(&self.tokens, self.pos)),
+                "expected an invertible texture transform, found a singular one".to_string(),
+            ));
+        }
+        Ok(Material::Texture(Texture {
+            kind,
+            matrix,
+            a: pair[0],
+            b: pair[1],
+        }))
     }
 
     fn nest(&mut self) -> Result<()> {
@@ -998,4 +1045,33 @@ fn set_default_material(obj: &mut Object, default: u32) {
             .for_each(|c| set_default_material(c, default)),
         Object::Transform(t) => set_default_material(&mut t.child, default),
     }
+}
+
+/// The token just before position `pos` (the closing brace of a block just read).
+fn kind_token<'a>(tokens: &[Token<'a>], pos: usize) -> Token<'a> {
+    tokens[pos.saturating_sub(1)]
+}
+
+/// The first material that reaches itself through texture references, if any.
+fn texture_cycle(materials: &[Material]) -> Option<usize> {
+    // 0 = unvisited, 1 = on the current path, 2 = done.
+    fn visit(m: usize, materials: &[Material], state: &mut [u8]) -> bool {
+        match state[m] {
+            1 => return true,
+            2 => return false,
+            _ => {}
+        }
+        state[m] = 1;
+        if let Material::Texture(t) = &materials[m] {
+            for next in [t.a as usize, t.b as usize] {
+                if visit(next, materials, state) {
+                    return true;
+                }
+            }
+        }
+        state[m] = 2;
+        false
+    }
+    let mut state = vec![0u8; materials.len()];
+    (0..materials.len()).find(|&m| visit(m, materials, &mut state))
 }

@@ -16,15 +16,19 @@
 pub mod queue;
 mod stages;
 
+use std::time::{Duration, Instant};
+
 use bumpalo::Bump;
 use rayon::prelude::*;
 
 use crate::geometry::Geometry;
 use crate::math::Vec3;
-use crate::raytree::RayTree;
+use crate::raytree::{RayTree, SegmentKind};
+use crate::render::Progress;
 use crate::render::{Frame, RenderOptions};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
+use crate::stats::RayCounts;
 use queue::RayQueue;
 use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 
@@ -38,11 +42,16 @@ pub struct Context<'s> {
     pub opts: &'s ShadeOptions,
 }
 
-/// The part of the frame a band writes: colour, depth and normal of its pixels.
+/// What a band writes: colour, depth and normal of its pixels, the rays it cast, and (for a
+/// single traced pixel) its ray tree.
 pub struct BandOutput<'f> {
     pub color: &'f mut [Vec3],
     pub depth: &'f mut [f32],
     pub normal: &'f mut [Vec3],
+    pub rays: RayCounts,
+    /// Time spent on each bounce.
+    pub bounce_time: Vec<Duration>,
+    pub tree: Option<&'f mut RayTree>,
 }
 
 /// A rectangle of pixels to render: columns `0..width` of rows `y0..y0 + rows` of a
@@ -65,9 +74,15 @@ pub struct Arenas {
     scratch: Bump,
 }
 
-/// Renders `scene` with the packet tracer, bands of rows in parallel. The bytes do not depend
-/// on the thread count: each pixel is computed by exactly one band, in a fixed order.
-pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -> Frame {
+/// Renders `scene` with the packet tracer, bands of rows in parallel, reporting finished rows
+/// to `progress`. The bytes do not depend on the thread count: each pixel is computed by exactly
+/// one band, in a fixed order.
+pub fn render_packet(
+    scene: &Scene,
+    geometry: &Geometry,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Frame {
     let (w, h) = (opts.width, opts.height);
     let mut frame = Frame::new(w, h);
     let ctx = Context {
@@ -76,13 +91,13 @@ pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -
         opts: &opts.shade,
     };
     let band_len = (w * BAND_ROWS) as usize;
-    frame
+    (frame.rays, frame.bounce_time) = frame
         .color
         .par_chunks_mut(band_len)
         .zip(frame.depth.par_chunks_mut(band_len))
         .zip(frame.normal.par_chunks_mut(band_len))
         .enumerate()
-        .for_each_init(Arenas::default, |arenas, (i, ((color, depth), normal))| {
+        .map_init(Arenas::default, |arenas, (i, ((color, depth), normal))| {
             let y0 = i as u32 * BAND_ROWS;
             let band = Band {
                 x0: 0,
@@ -96,13 +111,31 @@ pub fn render_packet(scene: &Scene, geometry: &Geometry, opts: &RenderOptions) -
                 color,
                 depth,
                 normal,
+                rays: RayCounts::default(),
+                bounce_time: Vec::new(),
+                tree: None,
             };
-            render_band(&ctx, band, &mut out, arenas, None);
-        });
+            render_band(&ctx, band, &mut out, arenas);
+            progress(band.rows);
+            (out.rays, out.bounce_time)
+        })
+        .reduce(
+            Default::default,
+            |(rays_a, mut time_a), (rays_b, time_b)| {
+                if time_a.len() < time_b.len() {
+                    time_a.resize(time_b.len(), Duration::ZERO);
+                }
+                for (a, b) in time_a.iter_mut().zip(time_b) {
+                    *a += b;
+                }
+                (rays_a.merged(rays_b), time_a)
+            },
+        );
     frame
 }
 
-/// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree.
+/// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree; returns the
+/// pixel's colour and the tree.
 pub fn trace_pixel_tree(
     scene: &Scene,
     geometry: &Geometry,
@@ -124,45 +157,36 @@ pub fn trace_pixel_tree(
         image_height: opts.height,
     };
     let (mut color, mut depth, mut normal) = ([Vec3::ZERO], [f32::INFINITY], [Vec3::ZERO]);
+    let mut tree = RayTree::default();
     let mut out = BandOutput {
         color: &mut color,
         depth: &mut depth,
         normal: &mut normal,
+        rays: RayCounts::default(),
+        bounce_time: Vec::new(),
+        tree: Some(&mut tree),
     };
-    let mut tree = RayTree::default();
-    render_band(
-        &ctx,
-        band,
-        &mut out,
-        &mut Arenas::default(),
-        Some(&mut tree),
-    );
+    render_band(&ctx, band, &mut out, &mut Arenas::default());
     (color[0], tree)
 }
 
 /// The per-band driver: camera rays, then bounce after bounce until no ray is left.
-fn render_band(
-    ctx: &Context<'_>,
-    band: Band,
-    out: &mut BandOutput<'_>,
-    arenas: &mut Arenas,
-    mut tree: Option<&mut RayTree>,
-) {
+fn render_band(ctx: &Context<'_>, band: Band, out: &mut BandOutput<'_>, arenas: &mut Arenas) {
     let Arenas { even, odd, scratch } = arenas;
     even.reset();
     odd.reset();
-    let mut rays = RayQueue::new_in(even);
+    let mut rays = RayQueue::with_capacity_in((band.width * band.rows) as usize, even);
     stages::generate_camera_rays(&ctx.scene.camera, band, &mut rays);
     let mut bounce = 0;
     // Two bounces per turn so each queue's arena is named: even bounces read `even`, odd `odd`.
     loop {
-        let next = run_bounce(ctx, bounce, rays, odd, scratch, out, tree.as_deref_mut());
+        let next = run_bounce(ctx, bounce, rays, odd, scratch, out);
         even.reset();
         if next.is_empty() {
             break;
         }
         bounce += 1;
-        rays = run_bounce(ctx, bounce, next, even, scratch, out, tree.as_deref_mut());
+        rays = run_bounce(ctx, bounce, next, even, scratch, out);
         odd.reset();
         if rays.is_empty() {
             break;
@@ -180,8 +204,8 @@ fn run_bounce<'n>(
     next_arena: &'n Bump,
     scratch: &mut Bump,
     out: &mut BandOutput<'_>,
-    mut tree: Option<&mut RayTree>,
 ) -> RayQueue<'n> {
+    let start = Instant::now();
     scratch.reset();
     let tmin = if bounce == 0 {
         ctx.scene.camera.tmin()
@@ -189,13 +213,34 @@ fn run_bounce<'n>(
         crate::shade::EPSILON
     };
     let hits = intersect_closest(ctx.geometry, &rays, tmin, scratch);
+    // Upper bounds: one shadow ray per light and hit (with shadows on), two children per hit.
+    let shadows = if ctx.opts.shadows {
+        ctx.scene.lights.len() * rays.len()
+    } else {
+        0
+    };
+    let children = if bounce < ctx.opts.bounces {
+        2 * rays.len()
+    } else {
+        0
+    };
     let mut q = BounceQueues {
+        shadows: queue::ShadowQueue::with_capacity_in(shadows, scratch),
+        next: RayQueue::with_capacity_in(children, next_arena),
         rays,
         hits,
-        shadows: queue::ShadowQueue::new_in(scratch),
-        next: RayQueue::new_in(next_arena),
     };
-    shade_hits(ctx, bounce, &mut q, out, tree.as_deref_mut());
-    trace_shadow_rays(ctx, &q.shadows, out, tree);
+    shade_hits(ctx, bounce, &mut q, out);
+    trace_shadow_rays(ctx, &q.shadows, out);
+    for kind in q.rays.kind.iter() {
+        out.rays.count(*kind, bounce);
+    }
+    out.rays
+        .count_many(SegmentKind::Shadow, bounce, q.shadows.len() as u64);
+    let b = bounce as usize;
+    if out.bounce_time.len() <= b {
+        out.bounce_time.resize(b + 1, Duration::ZERO);
+    }
+    out.bounce_time[b] += start.elapsed();
     q.next
 }

@@ -36,20 +36,21 @@ pub struct RayQueue<'b> {
 }
 
 impl<'b> RayQueue<'b> {
-    /// An empty queue in `arena`.
-    pub fn new_in(arena: &'b Bump) -> RayQueue<'b> {
+    /// An empty queue with room for `n` rays in `arena` (filling past `n` still works, it
+    /// just reallocates).
+    pub fn with_capacity_in(n: usize, arena: &'b Bump) -> RayQueue<'b> {
         RayQueue {
-            ox: BVec::new_in(arena),
-            oy: BVec::new_in(arena),
-            oz: BVec::new_in(arena),
-            dx: BVec::new_in(arena),
-            dy: BVec::new_in(arena),
-            dz: BVec::new_in(arena),
-            pixel: BVec::new_in(arena),
-            throughput: BVec::new_in(arena),
-            weight: BVec::new_in(arena),
-            kind: BVec::new_in(arena),
-            parent: BVec::new_in(arena),
+            ox: BVec::with_capacity_in(n, arena),
+            oy: BVec::with_capacity_in(n, arena),
+            oz: BVec::with_capacity_in(n, arena),
+            dx: BVec::with_capacity_in(n, arena),
+            dy: BVec::with_capacity_in(n, arena),
+            dz: BVec::with_capacity_in(n, arena),
+            pixel: BVec::with_capacity_in(n, arena),
+            throughput: BVec::with_capacity_in(n, arena),
+            weight: BVec::with_capacity_in(n, arena),
+            kind: BVec::with_capacity_in(n, arena),
+            parent: BVec::with_capacity_in(n, arena),
         }
     }
 
@@ -170,34 +171,38 @@ pub struct ShadowQueue<'b> {
     pub pixel: BVec<'b, u32>,
     /// What reaching the light adds to the pixel (throughput times the light's Phong term).
     pub contribution: BVec<'b, Vec3>,
+    /// Which light of the scene the ray goes to.
+    pub light: BVec<'b, u32>,
     /// The ray-tree segment of the ray being shaded, or [`NO_NODE`].
     pub parent: BVec<'b, u32>,
 }
 
 impl<'b> ShadowQueue<'b> {
-    /// An empty queue in `arena`.
-    pub fn new_in(arena: &'b Bump) -> ShadowQueue<'b> {
+    /// An empty queue with room for `n` shadow rays in `arena`.
+    pub fn with_capacity_in(n: usize, arena: &'b Bump) -> ShadowQueue<'b> {
         ShadowQueue {
-            ox: BVec::new_in(arena),
-            oy: BVec::new_in(arena),
-            oz: BVec::new_in(arena),
-            dx: BVec::new_in(arena),
-            dy: BVec::new_in(arena),
-            dz: BVec::new_in(arena),
-            max_t: BVec::new_in(arena),
-            pixel: BVec::new_in(arena),
-            contribution: BVec::new_in(arena),
-            parent: BVec::new_in(arena),
+            ox: BVec::with_capacity_in(n, arena),
+            oy: BVec::with_capacity_in(n, arena),
+            oz: BVec::with_capacity_in(n, arena),
+            dx: BVec::with_capacity_in(n, arena),
+            dy: BVec::with_capacity_in(n, arena),
+            dz: BVec::with_capacity_in(n, arena),
+            max_t: BVec::with_capacity_in(n, arena),
+            pixel: BVec::with_capacity_in(n, arena),
+            contribution: BVec::with_capacity_in(n, arena),
+            light: BVec::with_capacity_in(n, arena),
+            parent: BVec::with_capacity_in(n, arena),
         }
     }
 
-    /// Queues a shadow ray.
+    /// Queues a shadow ray towards light number `light`.
     pub fn push_shadow(
         &mut self,
         ray: &Ray,
         max_t: f32,
         pixel: u32,
         contribution: Vec3,
+        light: u32,
         parent: u32,
     ) {
         self.ox.push(ray.origin.x);
@@ -209,6 +214,7 @@ impl<'b> ShadowQueue<'b> {
         self.max_t.push(max_t);
         self.pixel.push(pixel);
         self.contribution.push(contribution);
+        self.light.push(light);
         self.parent.push(parent);
     }
 
@@ -277,7 +283,7 @@ mod tests {
     fn packets_cover_every_ray_once_with_the_tail_masked() {
         let arena = Bump::new();
         for n in [0usize, 1, 7, 8, 9, 16, 23] {
-            let mut q = RayQueue::new_in(&arena);
+            let mut q = RayQueue::with_capacity_in(n, &arena);
             for i in 0..n {
                 q.push_camera(&Ray::new(Vec3::splat(i as f32), Vec3::X), i as u32);
             }

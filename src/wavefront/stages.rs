@@ -9,7 +9,6 @@ use super::{Band, BandOutput, Context};
 use crate::geometry::Geometry;
 use crate::math::{Ray, Vec3};
 use crate::packet::{HitPacket, NO_HIT};
-use crate::raytree::RayTree;
 use crate::scene::Camera;
 use crate::shade::{self, EPSILON};
 use crate::simd::{LANES, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits};
@@ -76,7 +75,6 @@ pub fn shade_hits(
     bounce: u32,
     q: &mut BounceQueues<'_, '_, '_>,
     out: &mut BandOutput<'_>,
-    mut tree: Option<&mut RayTree>,
 ) {
     let scene = ctx.scene;
     for i in 0..q.rays.len() {
@@ -87,7 +85,7 @@ pub fn shade_hits(
         let weight = q.rays.weight[i];
         let prim = q.hits.prim[i];
         let hit = (prim != NO_HIT).then(|| ctx.geometry.surface(prim as u32, &ray, q.hits.t[i]));
-        let node = match tree.as_deref_mut() {
+        let node = match out.tree.as_deref_mut() {
             Some(t) => {
                 let parent = q.rays.parent[i];
                 let parent = (parent != NO_NODE).then_some(parent as usize);
@@ -107,7 +105,7 @@ pub fn shade_hits(
             continue;
         };
         out.color[px] += throughput * shade::ambient(scene, &s);
-        for light in &scene.lights {
+        for (index, light) in scene.lights.iter().enumerate() {
             let Some(sample) = shade::light_sample(&s, ray.dir, light, ctx.opts) else {
                 continue;
             };
@@ -117,6 +115,7 @@ pub fn shade_hits(
                     sample.max_t,
                     pixel,
                     throughput * sample.color,
+                    index as u32,
                     node,
                 );
             } else {
@@ -137,12 +136,7 @@ pub fn shade_hits(
 
 /// Traces the queued shadow rays, 8 at a time, and adds the light of the unblocked ones. With
 /// transparent shadows, each lane walks its hits in order, tinting by their transparent colour.
-pub fn trace_shadow_rays(
-    ctx: &Context<'_>,
-    shadows: &ShadowQueue<'_>,
-    out: &mut BandOutput<'_>,
-    mut tree: Option<&mut RayTree>,
-) {
+pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut BandOutput<'_>) {
     for first in (0..shadows.len()).step_by(LANES) {
         let (mut rays, max_t) = shadows.packet(first, EPSILON);
         let n = (shadows.len() - first).min(LANES);
@@ -162,12 +156,12 @@ pub fn trace_shadow_rays(
                         active &= !(1 << lane);
                         continue;
                     }
+                    let ray = rays.ray(lane);
                     let material = ctx
                         .geometry
-                        .surface(prims[lane] as u32, &rays.ray(lane), ts[lane])
+                        .surface(prims[lane] as u32, &ray, ts[lane])
                         .material;
-                    let m = scene_phong(ctx, material);
-                    light[lane] *= m.transparent;
+                    light[lane] *= ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
                     tmin[lane] = ts[lane];
                     if light[lane] == Vec3::ZERO {
                         active &= !(1 << lane);
@@ -187,19 +181,19 @@ pub fn trace_shadow_rays(
         for (lane, l) in light.iter().enumerate().take(n) {
             let k = first + lane;
             out.color[shadows.pixel[k] as usize] += shadows.contribution[k] * *l;
-            if let Some(t) = tree.as_deref_mut() {
+            if let Some(t) = out.tree.as_deref_mut() {
                 let parent = shadows.parent[k];
                 if parent != NO_NODE {
+                    // The tree names the nearest occluder, which an any-hit test does not find.
                     let ray: Ray = shadows.ray(k);
-                    t.add_shadow(parent as usize, &ray, shadows.max_t[k], *l != Vec3::ONE);
+                    let max_t = shadows.max_t[k];
+                    let occluder = ctx
+                        .geometry
+                        .closest_hit(&ray, EPSILON, max_t)
+                        .map(|(t, prim)| ctx.geometry.surface(prim, &ray, t));
+                    t.add_shadow(parent as usize, shadows.light[k], &ray, max_t, occluder);
                 }
             }
         }
     }
-}
-
-fn scene_phong<'a>(ctx: &'a Context<'_>, material: u32) -> &'a crate::scene::Phong {
-    ctx.scene.materials[material as usize]
-        .phong()
-        .expect("textures are rejected before rendering")
 }

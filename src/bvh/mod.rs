@@ -1,0 +1,595 @@
+//! A bounding volume hierarchy over primitive bounds, and its traversals. The tree knows nothing
+//! about spheres or triangles: it is built from boxes (and opaque tags that keep kinds apart in
+//! leaves), and every traversal takes the leaf test as a closure that receives a range of
+//! primitive indices (obvhs-style). Nodes are 32 bytes, depth first: an interior node's left
+//! child follows it, its right child is named.
+//!
+//! Traversals: [`Bvh::closest_packet`] and [`Bvh::occluded_packet`] walk 8 rays at once (per-lane
+//! entry distances, culling of subtrees no active lane can reach nearer than its current hit,
+//! nearer child first by lane vote, any-hit stops when every lane is occluded);
+//! [`Bvh::closest`] and [`Bvh::occluded`] walk a single ray.
+
+pub mod build;
+
+use std::ops::Range;
+
+use crate::math::{Ray, Vec3};
+use crate::packet::RayPacket;
+use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, le, lt, max, min, mul_add, select};
+
+/// The deepest a tree gets (the traversal stacks are sized by it).
+pub const MAX_DEPTH: usize = 64;
+
+/// Packet traversal continues ray by ray below a node fewer lanes than this enter (see
+/// PERF.md, "single-ray switch").
+pub const SINGLE_RAY_BELOW: u32 = 3;
+
+/// Relative widening of the slab test's exit distance, so that rounding never culls a box a
+/// ray touches (1 + 2 gamma(3), Pharr et al.).
+const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    /// The empty box (grows to anything).
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    /// The smallest box holding both.
+    #[inline]
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+
+    /// Grows the box to hold `p`.
+    #[inline]
+    pub fn grow(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// The centre.
+    #[inline]
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Half the surface area (the SAH only compares areas).
+    #[inline]
+    pub fn half_area(&self) -> f32 {
+        let d = (self.max - self.min).max(Vec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    /// True if `o` lies inside this box.
+    pub fn contains(&self, o: &Aabb) -> bool {
+        self.min.cmple(o.min).all() && self.max.cmpge(o.max).all()
+    }
+}
+
+/// A node: its box and either a primitive range (leaf) or its right child (interior).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    /// Leaf: first primitive; interior: index of the right child (the left one is next).
+    pub first: u32,
+    pub max: [f32; 3],
+    /// Leaf: number of primitives (at least 1); interior: 0.
+    pub count: u32,
+}
+
+impl BvhNode {
+    fn leaf(b: &Aabb, first: u32, count: u32) -> BvhNode {
+        BvhNode {
+            min: b.min.to_array(),
+            first,
+            max: b.max.to_array(),
+            count,
+        }
+    }
+
+    fn interior(b: &Aabb, right: u32) -> BvhNode {
+        BvhNode {
+            min: b.min.to_array(),
+            first: right,
+            max: b.max.to_array(),
+            count: 0,
+        }
+    }
+
+    /// True for a leaf.
+    #[inline(always)]
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+
+    /// The primitive range of a leaf.
+    #[inline(always)]
+    pub fn prims(&self) -> Range<u32> {
+        self.first..self.first + self.count
+    }
+
+    /// The node's box.
+    pub fn aabb(&self) -> Aabb {
+        Aabb {
+            min: self.min.into(),
+            max: self.max.into(),
+        }
+    }
+}
+
+/// A BVH: nodes depth first, root at 0. Empty when built over no primitive.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+}
+
+/// Per-packet values the box test reuses: reciprocal directions and `-origin / dir`.
+struct PacketSlabs {
+    inv: Vec3x8,
+    neg_org_inv: Vec3x8,
+}
+
+impl PacketSlabs {
+    #[inline(always)]
+    fn new(rays: &RayPacket) -> PacketSlabs {
+        let safe = |d: F32x8| {
+            // A zero direction component would give 0 * inf = NaN in the slab test.
+            let tiny = F32x8::splat(1e-30);
+            let small = lt(d.abs(), tiny);
+            F32x8::splat(1.0) / select(small, select(lt(d, F32x8::splat(0.0)), -tiny, tiny), d)
+        };
+        let inv = Vec3x8 {
+            x: safe(rays.dir.x),
+            y: safe(rays.dir.y),
+            z: safe(rays.dir.z),
+        };
+        let neg_org_inv = Vec3x8 {
+            x: -(rays.origin.x * inv.x),
+            y: -(rays.origin.y * inv.y),
+            z: -(rays.origin.z * inv.z),
+        };
+        PacketSlabs { inv, neg_org_inv }
+    }
+
+    /// Lanes whose ray meets the box within `(tmin, tmax)`, and their entry distances.
+    #[inline(always)]
+    fn test(&self, n: &BvhNode, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
+        let slab = |lo: f32, hi: f32, inv: F32x8, noi: F32x8| {
+            let a = mul_add(F32x8::splat(lo), inv, noi);
+            let b = mul_add(F32x8::splat(hi), inv, noi);
+            (min(a, b), max(a, b))
+        };
+        let (x0, x1) = slab(n.min[0], n.max[0], self.inv.x, self.neg_org_inv.x);
+        let (y0, y1) = slab(n.min[1], n.max[1], self.inv.y, self.neg_org_inv.y);
+        let (z0, z1) = slab(n.min[2], n.max[2], self.inv.z, self.neg_org_inv.z);
+        let near = max(max(x0, y0), max(z0, tmin));
+        let far = min(min(x1, y1), min(z1, tmax)) * F32x8::splat(ROBUST);
+        (le(near, far), near)
+    }
+}
+
+/// Single-ray twin of [`PacketSlabs`].
+struct RaySlabs {
+    inv: Vec3,
+    neg_org_inv: Vec3,
+}
+
+impl RaySlabs {
+    #[inline(always)]
+    fn new(ray: &Ray) -> RaySlabs {
+        let safe = |d: f32| {
+            1.0 / if d.abs() < 1e-30 {
+                1e-30f32.copysign(d)
+            } else {
+                d
+            }
+        };
+        let inv = Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z));
+        RaySlabs {
+            inv,
+            neg_org_inv: -(ray.origin * inv),
+        }
+    }
+
+    /// The entry distance if the ray meets the box within `(tmin, tmax)`.
+    #[inline(always)]
+    fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> Option<f32> {
+        let lo = Vec3::from(n.min).mul_add(self.inv, self.neg_org_inv);
+        let hi = Vec3::from(n.max).mul_add(self.inv, self.neg_org_inv);
+        let near = lo.min(hi).max_element().max(tmin);
+        let far = lo.max(hi).min_element().min(tmax) * ROBUST;
+        (near <= far).then_some(near)
+    }
+}
+
+/// A pending subtree of a packet traversal: the node and its lanes' entry distances.
+#[derive(Clone, Copy)]
+struct Pending {
+    node: u32,
+    near: F32x8,
+    lanes: Mask,
+}
+
+impl Bvh {
+    /// True when the tree has no node.
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Visits, for the active lanes of `rays`, every leaf one of them may hit nearer than its
+    /// `tmax` lane; `leaf(state, range, rays, tmax)` tests the leaf's primitives for the
+    /// packet's active lanes and lowers their `tmax` where it finds nearer hits. Nearer
+    /// children go first so `tmax` shrinks early and culls more. When fewer than
+    /// [`SINGLE_RAY_BELOW`] lanes enter a subtree, each continues alone through
+    /// [`Bvh::closest`]'s traversal with `leaf1(state, range, lane, ray, tmin, t)` (Embree's
+    /// switch to single rays). `state` is the caller's, shared by both leaf tests.
+    pub fn closest_packet<S>(
+        &self,
+        rays: &RayPacket,
+        tmax: &mut F32x8,
+        state: &mut S,
+        mut leaf: impl FnMut(&mut S, Range<u32>, &RayPacket, &mut F32x8),
+        mut leaf1: impl FnMut(&mut S, Range<u32>, usize, &Ray, f32, &mut f32),
+    ) {
+        if self.nodes.is_empty() || !any(rays.active) {
+            return;
+        }
+        let slabs = PacketSlabs::new(rays);
+        let mut local = *rays;
+        let mut stack = [Pending {
+            node: 0,
+            near: F32x8::splat(0.0),
+            lanes: rays.active,
+        }; MAX_DEPTH * 2];
+        let (hit, near) = slabs.test(&self.nodes[0], rays.tmin, *tmax);
+        stack[0] = Pending {
+            node: 0,
+            near,
+            lanes: hit & rays.active,
+        };
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let Pending {
+                mut node,
+                near,
+                lanes,
+            } = stack[top];
+            // cull: no lane of this subtree can hit nearer than its current hit
+            let mut lanes = lanes & lt(near, *tmax);
+            if !any(lanes) {
+                continue;
+            }
+            loop {
+                let n = &self.nodes[node as usize];
+                if n.is_leaf() {
+                    local.active = lanes;
+                    leaf(state, n.prims(), &local, tmax);
+                    break;
+                }
+                let bits = bitmask(lanes);
+                if bits.count_ones() < SINGLE_RAY_BELOW {
+                    // few lanes left: finish this subtree one ray at a time
+                    let (tmins, mut ts) =
+                        (crate::simd::lanes(rays.tmin), crate::simd::lanes(*tmax));
+                    for lane in (0..8).filter(|l| bits >> l & 1 == 1) {
+                        let ray = rays.ray(lane);
+                        let tmin = tmins[lane];
+                        self.closest_subtree(node, &ray, tmin, &mut ts[lane], |r, t| {
+                            leaf1(state, r, lane, &ray, tmin, t)
+                        });
+                    }
+                    *tmax = crate::simd::from_lanes(ts);
+                    break;
+                }
+                let (left, right) = (node + 1, n.first);
+                let (hl, nl) = slabs.test(&self.nodes[left as usize], rays.tmin, *tmax);
+                let (hr, nr) = slabs.test(&self.nodes[right as usize], rays.tmin, *tmax);
+                let (hl, hr) = (hl & lanes, hr & lanes);
+                match (any(hl), any(hr)) {
+                    (false, false) => break,
+                    (true, false) => (node, lanes) = (left, hl),
+                    (false, true) => (node, lanes) = (right, hr),
+                    (true, true) => {
+                        // order: the child more lanes enter first goes first
+                        let both = hl & hr;
+                        let left_first = bitmask(both & lt(nl, nr)).count_ones() * 2
+                            >= bitmask(both).count_ones();
+                        let (first, second) = if left_first {
+                            ((left, hl, nl), (right, hr, nr))
+                        } else {
+                            ((right, hr, nr), (left, hl, nl))
+                        };
+                        stack[top] = Pending {
+                            node: second.0,
+                            near: second.2,
+                            lanes: second.1,
+                        };
+                        top += 1;
+                        (node, lanes) = (first.0, first.1);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves
+    /// until every active lane is occluded; `leaf(range, rays)` returns the lanes (of the
+    /// packet's active ones) blocked by the leaf's primitives.
+    pub fn occluded_packet(
+        &self,
+        rays: &RayPacket,
+        tmax: F32x8,
+        mut leaf: impl FnMut(Range<u32>, &RayPacket) -> Mask,
+        mut leaf1: impl FnMut(Range<u32>, &Ray, f32, f32) -> bool,
+    ) -> Mask {
+        let mut occluded = crate::simd::mask_none();
+        if self.nodes.is_empty() || !any(rays.active) {
+            return occluded;
+        }
+        let slabs = PacketSlabs::new(rays);
+        let mut local = *rays;
+        let mut stack = [(0u32, rays.active); MAX_DEPTH * 2];
+        let (hit, _) = slabs.test(&self.nodes[0], rays.tmin, tmax);
+        stack[0] = (0, hit & rays.active);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (mut node, lanes) = stack[top];
+            let mut lanes = lanes & !occluded;
+            if !any(lanes) {
+                continue;
+            }
+            loop {
+                let n = &self.nodes[node as usize];
+                if n.is_leaf() {
+                    local.active = lanes;
+                    occluded |= leaf(n.prims(), &local);
+                    // early exit: every active lane is blocked
+                    if all(occluded | !rays.active) {
+                        return occluded;
+                    }
+                    break;
+                }
+                let bits = bitmask(lanes);
+                if bits.count_ones() < SINGLE_RAY_BELOW {
+                    // few lanes left: finish this subtree one ray at a time
+                    let (tmins, tmaxs) = (crate::simd::lanes(rays.tmin), crate::simd::lanes(tmax));
+                    let mut blocked = 0;
+                    for lane in (0..8).filter(|l| bits >> l & 1 == 1) {
+                        let ray = rays.ray(lane);
+                        let (t0, t1) = (tmins[lane], tmaxs[lane]);
+                        if self.occluded_subtree(node, &ray, t0, t1, |r| leaf1(r, &ray, t0, t1)) {
+                            blocked |= 1 << lane;
+                        }
+                    }
+                    occluded |= crate::simd::mask_from_bits(blocked);
+                    if all(occluded | !rays.active) {
+                        return occluded;
+                    }
+                    break;
+                }
+                let (left, right) = (node + 1, n.first);
+                let (hl, _) = slabs.test(&self.nodes[left as usize], rays.tmin, tmax);
+                let (hr, _) = slabs.test(&self.nodes[right as usize], rays.tmin, tmax);
+                let (hl, hr) = (hl & lanes, hr & lanes);
+                match (any(hl), any(hr)) {
+                    (false, false) => break,
+                    (true, false) => (node, lanes) = (left, hl),
+                    (false, true) => (node, lanes) = (right, hr),
+                    (true, true) => {
+                        stack[top] = (right, hr);
+                        top += 1;
+                        (node, lanes) = (left, hl);
+                    }
+                }
+            }
+        }
+        occluded
+    }
+
+    /// Single-ray twin of [`Bvh::closest_packet`]: `leaf(range, tmax)` lowers `tmax` on hits.
+    pub fn closest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: &mut f32,
+        leaf: impl FnMut(Range<u32>, &mut f32),
+    ) {
+        if !self.nodes.is_empty() {
+            self.closest_subtree(0, ray, tmin, tmax, leaf);
+        }
+    }
+
+    /// [`Bvh::closest`] below node `root` only.
+    fn closest_subtree(
+        &self,
+        root: u32,
+        ray: &Ray,
+        tmin: f32,
+        tmax: &mut f32,
+        mut leaf: impl FnMut(Range<u32>, &mut f32),
+    ) {
+        let slabs = RaySlabs::new(ray);
+        let Some(near) = slabs.test(&self.nodes[root as usize], tmin, *tmax) else {
+            return;
+        };
+        let mut stack = [(0u32, 0.0f32); MAX_DEPTH * 2];
+        stack[0] = (root, near);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (mut node, near) = stack[top];
+            if near >= *tmax {
+                continue;
+            }
+            loop {
+                let n = &self.nodes[node as usize];
+                if n.is_leaf() {
+                    leaf(n.prims(), tmax);
+                    break;
+                }
+                let (left, right) = (node + 1, n.first);
+                let l = slabs.test(&self.nodes[left as usize], tmin, *tmax);
+                let r = slabs.test(&self.nodes[right as usize], tmin, *tmax);
+                match (l, r) {
+                    (None, None) => break,
+                    (Some(_), None) => node = left,
+                    (None, Some(_)) => node = right,
+                    (Some(nl), Some(nr)) => {
+                        let (first, second) = if nl <= nr {
+                            (left, (right, nr))
+                        } else {
+                            (right, (left, nl))
+                        };
+                        stack[top] = second;
+                        top += 1;
+                        node = first;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Single-ray twin of [`Bvh::occluded_packet`]: stops at the first leaf that blocks.
+    pub fn occluded(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        leaf: impl FnMut(Range<u32>) -> bool,
+    ) -> bool {
+        !self.nodes.is_empty() && self.occluded_subtree(0, ray, tmin, tmax, leaf)
+    }
+
+    /// [`Bvh::occluded`] below node `root` only.
+    fn occluded_subtree(
+        &self,
+        root: u32,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        mut leaf: impl FnMut(Range<u32>) -> bool,
+    ) -> bool {
+        let slabs = RaySlabs::new(ray);
+        let mut stack = [0u32; MAX_DEPTH * 2];
+        let mut top = 0;
+        if slabs.test(&self.nodes[root as usize], tmin, tmax).is_none() {
+            return false;
+        }
+        let mut node = root;
+        loop {
+            let n = &self.nodes[node as usize];
+            if n.is_leaf() {
+                if leaf(n.prims()) {
+                    return true;
+                }
+            } else {
+                let (left, right) = (node + 1, n.first);
+                let l = slabs.test(&self.nodes[left as usize], tmin, tmax).is_some();
+                let r = slabs
+                    .test(&self.nodes[right as usize], tmin, tmax)
+                    .is_some();
+                match (l, r) {
+                    (true, true) => {
+                        stack[top] = right;
+                        top += 1;
+                        node = left;
+                        continue;
+                    }
+                    (true, false) => {
+                        node = left;
+                        continue;
+                    }
+                    (false, true) => {
+                        node = right;
+                        continue;
+                    }
+                    (false, false) => {}
+                }
+            }
+            if top == 0 {
+                return false;
+            }
+            top -= 1;
+            node = stack[top];
+        }
+    }
+
+    /// Checks the tree's invariants against the primitive bounds and tags it was built from
+    /// (after reordering: primitive `i` of a leaf range is `bounds[i]`): every primitive in
+    /// exactly one leaf, boxes nested, leaves hold their primitives and never mix tags,
+    /// depth within [`MAX_DEPTH`].
+    pub fn validate(&self, bounds: &[Aabb], tags: &[u8]) -> Result<(), String> {
+        if bounds.is_empty() {
+            return if self.nodes.is_empty() {
+                Ok(())
+            } else {
+                Err("nodes without primitives".into())
+            };
+        }
+        let mut seen = vec![false; bounds.len()];
+        let mut stack = vec![(0u32, 0usize)];
+        let mut visited = 0;
+        while let Some((i, depth)) = stack.pop() {
+            visited += 1;
+            if depth >= MAX_DEPTH {
+                return Err(format!("node {i} at depth {depth}"));
+            }
+            let n = self
+                .nodes
+                .get(i as usize)
+                .ok_or_else(|| format!("node {i} out of range"))?;
+            let b = n.aabb();
+            if n.is_leaf() {
+                let r = n.prims();
+                if r.end as usize > bounds.len() {
+                    return Err(format!("leaf {i} range {r:?} out of bounds"));
+                }
+                for p in r.clone() {
+                    if std::mem::replace(&mut seen[p as usize], true) {
+                        return Err(format!("primitive {p} in two leaves"));
+                    }
+                    if !b.contains(&bounds[p as usize]) {
+                        return Err(format!("leaf {i} does not hold primitive {p}"));
+                    }
+                    if tags[p as usize] != tags[r.start as usize] {
+                        return Err(format!("leaf {i} mixes tags"));
+                    }
+                }
+            } else {
+                let (l, r) = (i + 1, n.first);
+                if r <= l || r as usize >= self.nodes.len() {
+                    return Err(format!("interior node {i} has bad children {l}, {r}"));
+                }
+                for c in [l, r] {
+                    if !b.contains(&self.nodes[c as usize].aabb()) {
+                        return Err(format!("node {i} does not hold child {c}"));
+                    }
+                    stack.push((c, depth + 1));
+                }
+            }
+        }
+        if visited != self.nodes.len() {
+            return Err(format!("{} nodes, {visited} reachable", self.nodes.len()));
+        }
+        match seen.iter().position(|s| !s) {
+            Some(p) => Err(format!("primitive {p} in no leaf")),
+            None => Ok(()),
+        }
+    }
+}
+
+const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);

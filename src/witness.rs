@@ -1,0 +1,1071 @@
+//! The picture of a ray tree: the scene seen by a second, "witness" camera placed beside the
+//! main one, with the tree's segments drawn over it in the course's colours (eye gray, shadow
+//! green, reflected red, transmitted blue; blocked shadow rays dashed dark green), the main
+//! camera drawn as a small white frustum, lights as yellow dots and a legend.
+//!
+//! ```text
+//! RayTree + main Camera --witness_camera--> Camera --render--> Frame --draw_ray_tree--> Rgb8
+//! ```
+//!
+//! The witness camera ([`witness_camera`], default [`WitnessPlace::Orbit`]): it sees the eye
+//! ray's first hit (or, if the eye ray escapes, the point [`ESCAPE_LOOK_AT`] along it) from the
+//! main camera's side of the scene turned [`DEFAULT_YAW_DEG`] degrees about the scene's vertical
+//! axis (the world axis nearest the main camera's up vector; positive turns to the main
+//! camera's right) and raised [`DEFAULT_PITCH_DEG`] degrees, with a [`DEFAULT_ANGLE_DEG`] degree
+//! field of view. It frames the main camera, the eye ray, and the tree's hits, occluders and
+//! point lights within twice the main camera's distance of that hit (farther ones may leave
+//! the picture): centred on their extent across the view, as near as keeps them in the middle
+//! 85% of the picture. [`WitnessPlace::At`] places it explicitly instead. The witness sees the
+//! scene through [`cutaway`]: planes it would see from behind are left out, so it can look
+//! into a room of walls (the facing mirrors) from outside.
+//!
+//! Drawing: segments are clipped against the witness camera's near plane in 3D and against the
+//! image in 2D, drawn 2-3 pixels wide (scaled with the image) with anti-aliased edges over a dark
+//! halo, so they read on any background; parts hidden behind a surface (by the witness frame's
+//! depth) are drawn fainter.
+
+use glam::Quat;
+
+use crate::math::Vec3;
+use crate::output::{Rgb8, color_image};
+use crate::raytree::{EndKind, RayTree, SegmentKind};
+use crate::render::Frame;
+use crate::scene::{Camera, Object, Projection, Transformed};
+
+/// Default turn of the witness camera about the vertical axis, in degrees.
+pub const DEFAULT_YAW_DEG: f32 = 40.0;
+/// Default extra elevation of the witness camera, in degrees.
+pub const DEFAULT_PITCH_DEG: f32 = 20.0;
+/// Default field of view of the witness camera, in degrees.
+pub const DEFAULT_ANGLE_DEG: f32 = 60.0;
+/// How far along an escaping eye ray the witness camera looks, in scene units.
+pub const ESCAPE_LOOK_AT: f32 = 10.0;
+
+/// Where the witness camera stands.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WitnessPlace {
+    /// Orbit the main camera about the look-at point by `yaw_deg` about the vertical axis and
+    /// `pitch_deg` upwards, at the distance that frames the tree.
+    Orbit { yaw_deg: f32, pitch_deg: f32 },
+    /// Stand at `center` and look at `look_at`.
+    At { center: Vec3, look_at: Vec3 },
+}
+
+/// How to place the witness camera: where, and its full field of view in degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WitnessSpec {
+    /// Position rule.
+    pub place: WitnessPlace,
+    /// Full field of view, degrees.
+    pub angle_deg: f32,
+}
+
+impl Default for WitnessSpec {
+    fn default() -> WitnessSpec {
+        WitnessSpec {
+            place: WitnessPlace::Orbit {
+                yaw_deg: DEFAULT_YAW_DEG,
+                pitch_deg: DEFAULT_PITCH_DEG,
+            },
+            angle_deg: DEFAULT_ANGLE_DEG,
+        }
+    }
+}
+
+/// The scene's vertical axis: the signed world axis nearest the main camera's up vector.
+pub fn vertical_axis(main: &Camera) -> Vec3 {
+    let u = main.up;
+    let a = u.abs();
+    if a.y >= a.x && a.y >= a.z {
+        Vec3::Y * u.y.signum()
+    } else if a.x >= a.z {
+        Vec3::X * u.x.signum()
+    } else {
+        Vec3::Z * u.z.signum()
+    }
+}
+
+/// The point the default witness camera looks at: the eye ray's first hit, or a point
+/// [`ESCAPE_LOOK_AT`] along it when it escapes (in front of the main camera for an empty tree).
+pub fn look_at_point(main: &Camera, tree: &RayTree) -> Vec3 {
+    match tree.segments.iter().find(|s| s.parent.is_none()) {
+        Some(root) if root.end_kind == EndKind::Hit => root.end,
+        Some(root) => root.origin + (root.end - root.origin).normalize_or_zero() * ESCAPE_LOOK_AT,
+        None => main.center + main.direction * ESCAPE_LOOK_AT,
+    }
+}
+
+/// The witness camera for `tree` seen by `main`, for a `width` x `height` picture.
+pub fn witness_camera(
+    main: &Camera,
+    tree: &RayTree,
+    width: u32,
+    height: u32,
+    spec: &WitnessSpec,
+) -> Camera {
+    let angle = spec.angle_deg.clamp(1.0, 170.0).to_radians();
+    let vert = vertical_axis(main);
+    let (center, look_at) = match spec.place {
+        WitnessPlace::At { center, look_at } => (center, look_at),
+        WitnessPlace::Orbit { yaw_deg, pitch_deg } => {
+            let hit = look_at_point(main, tree);
+            let w = orbit_direction(main, hit, vert, yaw_deg, pitch_deg);
+            let (look_at, dist) = framing(main, tree, hit, w, vert, angle, width, height);
+            (look_at + w * dist, look_at)
+        }
+    };
+    let dir = (look_at - center).try_normalize().unwrap_or(main.direction);
+    // Camera::new needs an up vector not parallel to the direction.
+    let up = if dir.cross(vert).length() > 1e-3 {
+        vert
+    } else {
+        main.up
+    };
+    let up = if dir.cross(up).length() > 1e-3 {
+        up
+    } else {
+        dir.any_orthonormal_vector()
+    };
+    Camera::new(Projection::Perspective { angle }, center, dir, up)
+}
+
+/// Unit vector from the look-at point towards the witness camera: the main camera's side,
+/// turned by `yaw_deg` about `vert` and raised by `pitch_deg` (elevation kept within 75
+/// degrees of the horizon so the camera never looks straight down).
+fn orbit_direction(main: &Camera, look_at: Vec3, vert: Vec3, yaw_deg: f32, pitch_deg: f32) -> Vec3 {
+    let v = (main.center - look_at)
+        .try_normalize()
+        .unwrap_or(-main.direction);
+    let flat = v - vert * v.dot(vert);
+    let flat = flat.try_normalize().unwrap_or_else(|| {
+        (-main.direction - vert * (-main.direction).dot(vert)).normalize_or(main.horizontal)
+    });
+    let elevation = v.dot(vert).clamp(-1.0, 1.0).asin();
+    let turned = Quat::from_axis_angle(vert, yaw_deg.to_radians()) * flat;
+    let limit = 75f32.to_radians();
+    let e = (elevation + pitch_deg.to_radians()).clamp(-limit, limit);
+    (turned * e.cos() + vert * e.sin()).normalize()
+}
+
+/// Where a witness looking along `-w` should look and from how far: the centre of the framed
+/// points (seen across `w`) and the smallest distance at which they fit in the middle 85% of a
+/// `width` x `height` picture with field of view `angle`. `hit` is the point the orbit turns
+/// about.
+#[allow(clippy::too_many_arguments)] // reason: the framing inputs, each used once
+fn framing(
+    main: &Camera,
+    tree: &RayTree,
+    hit: Vec3,
+    w: Vec3,
+    vert: Vec3,
+    angle: f32,
+    width: u32,
+    height: u32,
+) -> (Vec3, f32) {
+    let forward = -w;
+    let right = forward.cross(vert).normalize_or(main.horizontal);
+    let up = right.cross(forward);
+    let side = width.max(height) as f32;
+    let t = (angle * 0.5).tan() * 0.85;
+    let (tx, ty) = (t * width as f32 / side, t * height as f32 / side);
+    // The main camera, the eye ray and every surface hit count; occluders and point lights
+    // count when they lie within twice the main camera's distance of the first hit (a light
+    // far away would shrink the tree to a dot; the shadow rays still point at it).
+    let reach = (main.center - hit).length().max(1e-3);
+    let mut points = vec![main.center];
+    points.extend(tree.segments.iter().filter_map(|s| {
+        let counts = s.parent.is_none()
+            || s.end_kind == EndKind::Hit
+            || (matches!(s.end_kind, EndKind::Occluder | EndKind::Light)
+                && (s.end - hit).length() <= 2.0 * reach);
+        counts.then_some(s.end)
+    }));
+    points.extend(
+        tree.segments
+            .iter()
+            .filter(|s| s.parent.is_none())
+            .map(|s| s.origin),
+    );
+    // An orthographic camera is drawn as its screen rectangle, which should fit too (the
+    // witness picture has the main image's size).
+    if let Projection::Orthographic { size } = main.kind {
+        let (fx, fy) = (width as f32 / side * 0.5, height as f32 / side * 0.5);
+        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+            points.push(
+                main.center + main.horizontal * (sx * fx * size) + main.up * (sy * fy * size),
+            );
+        }
+    }
+    points.retain(|p| p.is_finite());
+    // Centre the picture on the points' extent across the view direction.
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for p in &points {
+        let q = *p - hit;
+        let c = Vec3::new(q.dot(right), q.dot(up), 0.0);
+        lo = lo.min(c);
+        hi = hi.max(c);
+    }
+    let mid = (lo + hi) * 0.5;
+    let look_at = hit + right * mid.x + up * mid.y;
+    let mut dist = 0.05 * reach.max(1e-3);
+    for p in &points {
+        let q = *p - look_at;
+        let need = q.dot(w) + (q.dot(right).abs() / tx).max(q.dot(up).abs() / ty);
+        let clear = q.dot(w) + 0.05 * reach;
+        dist = dist.max(need).max(clear);
+    }
+    (look_at, dist)
+}
+
+/// The object tree without the planes and lone triangles (walls, mirrors) that a viewer at
+/// `eye` sees from behind (on the side their normal points away from), so the witness can look
+/// into a room; meshes and everything else, ids included, are kept.
+pub fn cutaway(obj: &Object, eye: Vec3) -> Object {
+    match obj {
+        Object::Plane { normal, offset, .. } if normal.dot(eye) < *offset => {
+            Object::Group(Vec::new())
+        }
+        Object::Triangle { v, .. } if (v[1] - v[0]).cross(v[2] - v[0]).dot(eye - v[0]) < 0.0 => {
+            Object::Group(Vec::new())
+        }
+        Object::Group(children) => {
+            Object::Group(children.iter().map(|c| cutaway(c, eye)).collect())
+        }
+        Object::Transform(t) => {
+            let local = t.inverse.transform_point3(eye);
+            Object::Transform(Box::new(Transformed::new(
+                t.matrix,
+                cutaway(&t.child, local),
+            )))
+        }
+        other => other.clone(),
+    }
+}
+
+/// Maps world points to the pixels of a perspective camera's picture.
+struct View {
+    center: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    /// `tan(angle / 2)`: screen half-size at unit depth.
+    tan_half: f32,
+    width: f32,
+    height: f32,
+    side: f32,
+    near: f32,
+}
+
+impl View {
+    fn new(cam: &Camera, width: u32, height: u32, near: f32) -> View {
+        let angle = match cam.kind {
+            Projection::Perspective { angle } => angle,
+            Projection::Orthographic { .. } => DEFAULT_ANGLE_DEG.to_radians(),
+        };
+        View {
+            center: cam.center,
+            forward: cam.direction,
+            right: cam.horizontal,
+            up: cam.up,
+            tan_half: (angle * 0.5).tan(),
+            width: width as f32,
+            height: height as f32,
+            side: width.max(height) as f32,
+            near,
+        }
+    }
+
+    /// Camera-space coordinates: (right, up, depth).
+    fn to_camera(&self, p: Vec3) -> Vec3 {
+        let d = p - self.center;
+        Vec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.forward))
+    }
+
+    /// Pixel position (x from the left, y from the top, continuous) of a camera-space point in
+    /// front of the camera; the inverse of [`Camera::sample_point`] and `generate_ray`.
+    fn to_pixel(&self, c: Vec3) -> [f32; 2] {
+        let sx = 0.5 + c.x / (c.z * 2.0 * self.tan_half);
+        let sy = 0.5 + c.y / (c.z * 2.0 * self.tan_half);
+        let x0 = (self.side - self.width) * 0.5;
+        let y0 = (self.side - self.height) * 0.5;
+        [sx * self.side - x0, y0 + self.height - sy * self.side]
+    }
+
+    /// Length of the un-normalised ray direction (unit depth) through pixel `(px, py)`, which
+    /// turns the frame's distances into depths.
+    fn ray_length(&self, px: f32, py: f32) -> f32 {
+        let x0 = (self.side - self.width) * 0.5;
+        let y0 = (self.side - self.height) * 0.5;
+        let sx = (x0 + px) / self.side - 0.5;
+        let sy = (y0 + self.height - py) / self.side - 0.5;
+        let h = 2.0 * self.tan_half;
+        (1.0 + (sx * h).powi(2) + (sy * h).powi(2)).sqrt()
+    }
+
+    /// The part of the world segment `a`-`b` in front of the near plane, as pixel positions
+    /// with their depths; `None` if it lies wholly behind.
+    fn project_segment(&self, a: Vec3, b: Vec3) -> Option<([f32; 2], f32, [f32; 2], f32)> {
+        let (mut ca, mut cb) = (self.to_camera(a), self.to_camera(b));
+        if ca.z < self.near && cb.z < self.near {
+            return None;
+        }
+        if ca.z < self.near {
+            ca = ca + (cb - ca) * ((self.near - ca.z) / (cb.z - ca.z));
+        } else if cb.z < self.near {
+            cb = cb + (ca - cb) * ((self.near - cb.z) / (ca.z - cb.z));
+        }
+        Some((self.to_pixel(ca), ca.z, self.to_pixel(cb), cb.z))
+    }
+}
+
+/// Display-space RGB canvas with the witness frame's depths for the hidden-part test.
+struct Canvas<'f> {
+    width: usize,
+    height: usize,
+    rgb: Vec<[f32; 3]>,
+    frame: &'f Frame,
+}
+
+/// How one line is drawn.
+#[derive(Clone, Copy)]
+struct Pen {
+    color: [f32; 3],
+    width: f32,
+    alpha: f32,
+    /// Dash and gap lengths in pixels.
+    dash: Option<(f32, f32)>,
+}
+
+const HIDDEN_ALPHA: f32 = 0.35;
+
+impl Canvas<'_> {
+    fn blend(&mut self, x: usize, y: usize, c: [f32; 3], a: f32) {
+        let p = &mut self.rgb[y * self.width + x];
+        for k in 0..3 {
+            p[k] += (c[k] - p[k]) * a;
+        }
+    }
+
+    /// Draws the 2D segment `a`-`b` (depths `za`, `zb`, or `None` for no hidden test).
+    fn line(
+        &mut self,
+        view: &View,
+        a: [f32; 2],
+        b: [f32; 2],
+        depths: Option<(f32, f32)>,
+        pen: Pen,
+    ) {
+        let hw = pen.width * 0.5;
+        let pad = hw + 2.0;
+        let Some((t0, t1)) = clip_to_rect(
+            a,
+            b,
+            -pad,
+            -pad,
+            self.width as f32 + pad,
+            self.height as f32 + pad,
+        ) else {
+            return;
+        };
+        let lerp = |t: f32| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
+        let (p, q) = (lerp(t0), lerp(t1));
+        let d = [b[0] - a[0], b[1] - a[1]];
+        let len2 = d[0] * d[0] + d[1] * d[1];
+        let len = len2.sqrt();
+        let x_major = d[0].abs() >= d[1].abs();
+        // Walk the major axis; each column (or row) covers the pixels within the pen's reach,
+        // so every pixel is visited once per line.
+        let (major, minor) = if x_major { (0, 1) } else { (1, 0) };
+        let (lim_major, lim_minor) = if x_major {
+            (self.width, self.height)
+        } else {
+            (self.height, self.width)
+        };
+        let lo = p[major].min(q[major]) - hw - 1.0;
+        let hi = p[major].max(q[major]) + hw + 1.0;
+        let slope = if d[major] != 0.0 {
+            d[minor] / d[major]
+        } else {
+            0.0
+        };
+        let reach = (hw + 1.5) * (1.0 + slope * slope).sqrt() + 1.0;
+        let i0 = lo.floor().max(0.0) as usize;
+        let i1 = (hi.ceil().max(0.0) as usize).min(lim_major);
+        for i in i0..i1 {
+            let m = (i as f32 + 0.5).clamp(p[major].min(q[major]), p[major].max(q[major]));
+            let c = p[minor] + (m - p[major]) * slope;
+            let j0 = (c - reach).floor().max(0.0) as usize;
+            let j1 = ((c + reach).ceil().max(0.0) as usize).min(lim_minor);
+            for j in j0..j1 {
+                let (x, y) = if x_major { (i, j) } else { (j, i) };
+                let px = [x as f32 + 0.5, y as f32 + 0.5];
+                let t = if len2 > 0.0 {
+                    (((px[0] - a[0]) * d[0] + (px[1] - a[1]) * d[1]) / len2).clamp(t0, t1)
+                } else {
+                    0.0
+                };
+                let near = lerp(t);
+                let dist = ((px[0] - near[0]).powi(2) + (px[1] - near[1]).powi(2)).sqrt();
+                let cover = (hw + 0.5 - dist).clamp(0.0, 1.0);
+                if cover <= 0.0 {
+                    continue;
+                }
+                if pen
+                    .dash
+                    .is_some_and(|(on, off)| (t * len) % (on + off) >= on)
+                {
+                    continue;
+                }
+                let mut alpha = pen.alpha * cover;
+                if let Some((za, zb)) = depths {
+                    let z = 1.0 / ((1.0 - t) / za + t / zb);
+                    let surface =
+                        self.frame.depth[y * self.width + x] / view.ray_length(px[0], px[1]);
+                    if z > surface * 1.02 + view.near {
+                        alpha *= HIDDEN_ALPHA;
+                    }
+                }
+                self.blend(x, y, pen.color, alpha);
+            }
+        }
+    }
+
+    /// Draws the world segment `a`-`b`, clipped to the near plane, with its halo.
+    fn segment3(&mut self, view: &View, a: Vec3, b: Vec3, pen: Pen) {
+        if let Some((pa, za, pb, zb)) = view.project_segment(a, b) {
+            let halo = Pen {
+                color: [0.0; 3],
+                width: pen.width + 2.5,
+                alpha: 0.55 * pen.alpha,
+                ..pen
+            };
+            self.line(view, pa, pb, Some((za, zb)), halo);
+            self.line(view, pa, pb, Some((za, zb)), pen);
+        }
+    }
+
+    /// A filled disc with a dark rim.
+    fn dot(&mut self, c: [f32; 2], radius: f32, color: [f32; 3]) {
+        let r = radius + 1.5;
+        let x0 = (c[0] - r - 1.0).floor().max(0.0) as usize;
+        let y0 = (c[1] - r - 1.0).floor().max(0.0) as usize;
+        let x1 = ((c[0] + r + 1.0).ceil().max(0.0) as usize).min(self.width);
+        let y1 = ((c[1] + r + 1.0).ceil().max(0.0) as usize).min(self.height);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let d = ((x as f32 + 0.5 - c[0]).powi(2) + (y as f32 + 0.5 - c[1]).powi(2)).sqrt();
+                let rim = (r + 0.5 - d).clamp(0.0, 1.0);
+                if rim > 0.0 {
+                    self.blend(x, y, [0.0; 3], 0.8 * rim);
+                }
+                let fill = (radius + 0.5 - d).clamp(0.0, 1.0);
+                if fill > 0.0 {
+                    self.blend(x, y, color, fill);
+                }
+            }
+        }
+    }
+
+    /// A filled rectangle.
+    fn rect(&mut self, x: usize, y: usize, w: usize, h: usize, color: [f32; 3], alpha: f32) {
+        for yy in y..(y + h).min(self.height) {
+            for xx in x..(x + w).min(self.width) {
+                self.blend(xx, yy, color, alpha);
+            }
+        }
+    }
+
+    /// Text in the built-in 5x7 font, `scale` pixels per font pixel, top-left at `(x, y)`.
+    fn text(&mut self, x: usize, y: usize, scale: usize, s: &str, color: [f32; 3]) {
+        for (k, ch) in s.chars().enumerate() {
+            let Some(rows) = glyph(ch) else {
+                continue;
+            };
+            let drop = usize::from(matches!(ch, 'g' | 'j' | 'p' | 'q' | 'y'));
+            for (r, row) in rows.iter().enumerate() {
+                let r = r + drop;
+                for (c, bit) in row.bytes().enumerate() {
+                    if bit == b'#' {
+                        let gx = x + (k * 6 + c) * scale;
+                        self.rect(gx, y + r * scale, scale, scale, color, 1.0);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The parameter range `[t0, t1]` of segment `a`-`b` inside the rectangle (Liang-Barsky).
+fn clip_to_rect(
+    a: [f32; 2],
+    b: [f32; 2],
+    x0: f32,
+    y0: f32,
+    x1: f32,
+    y1: f32,
+) -> Option<(f32, f32)> {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+    for (p, q) in [
+        (-d[0], a[0] - x0),
+        (d[0], x1 - a[0]),
+        (-d[1], a[1] - y0),
+        (d[1], y1 - a[1]),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    (t0 <= t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
+}
+
+/// The colour the course gives a kind of segment (display space).
+pub fn kind_color(kind: SegmentKind, blocked: bool) -> [f32; 3] {
+    match (kind, blocked) {
+        (SegmentKind::Eye, _) => [0.78, 0.78, 0.78],
+        (SegmentKind::Shadow, false) => [0.3, 1.0, 0.35],
+        (SegmentKind::Shadow, true) => [0.1, 0.7, 0.2],
+        (SegmentKind::Reflected, _) => [1.0, 0.2, 0.15],
+        (SegmentKind::Transmitted, _) => [0.25, 0.5, 1.0],
+    }
+}
+
+const CAMERA_COLOR: [f32; 3] = [1.0, 1.0, 1.0];
+const LIGHT_COLOR: [f32; 3] = [1.0, 0.85, 0.1];
+
+/// Draws `tree` over `frame`, the scene rendered by `witness`; `main` is the camera the tree's
+/// pixel belongs to, rendering a `main_size` image; `title` is written at the top left.
+pub fn draw_ray_tree(
+    frame: &Frame,
+    witness: &Camera,
+    main: &Camera,
+    main_size: (u32, u32),
+    tree: &RayTree,
+    title: &str,
+) -> Rgb8 {
+    let img = color_image(frame);
+    let (w, h) = (frame.width as usize, frame.height as usize);
+    let look_at = look_at_point(main, tree);
+    let scale_len = (main.center - look_at).length().max(1e-3);
+    let near = 1e-4 * (witness.center - look_at).length().max(1e-3);
+    let view = View::new(witness, frame.width, frame.height, near);
+    let mut canvas = Canvas {
+        width: w,
+        height: h,
+        rgb: img
+            .data
+            .chunks_exact(3)
+            .map(|p| {
+                [
+                    p[0] as f32 / 255.0,
+                    p[1] as f32 / 255.0,
+                    p[2] as f32 / 255.0,
+                ]
+            })
+            .collect(),
+        frame,
+    };
+    let unit = (w.min(h) as f32 / 400.0).clamp(0.75, 3.0);
+
+    draw_main_camera(&mut canvas, &view, main, main_size, 0.18 * scale_len, unit);
+
+    // Shadow rays first, then the rays that carry colour, deepest first, so the eye ray and
+    // the first bounces stay on top.
+    let mut order: Vec<usize> = (0..tree.segments.len()).collect();
+    order.sort_by_key(|&i| {
+        let s = &tree.segments[i];
+        (s.kind != SegmentKind::Shadow, std::cmp::Reverse(s.depth))
+    });
+    for &i in &order {
+        let s = &tree.segments[i];
+        let pen = Pen {
+            color: kind_color(s.kind, s.blocked),
+            width: if s.kind == SegmentKind::Shadow {
+                2.0
+            } else {
+                2.6
+            } * unit,
+            alpha: 1.0,
+            dash: s.blocked.then_some((7.0 * unit, 5.0 * unit)),
+        };
+        canvas.segment3(&view, s.origin, s.end, pen);
+    }
+    for s in &tree.segments {
+        let c = view.to_camera(s.end);
+        if c.z <= view.near {
+            continue;
+        }
+        let p = view.to_pixel(c);
+        match s.end_kind {
+            EndKind::Hit => canvas.dot(p, 2.5 * unit, kind_color(s.kind, false)),
+            EndKind::Light => canvas.dot(p, 4.5 * unit, LIGHT_COLOR),
+            EndKind::Occluder => {
+                let r = 4.0 * unit;
+                let pen = Pen {
+                    color: kind_color(SegmentKind::Shadow, true),
+                    width: 2.0 * unit,
+                    alpha: 1.0,
+                    dash: None,
+                };
+                for (a, b) in [
+                    ([p[0] - r, p[1] - r], [p[0] + r, p[1] + r]),
+                    ([p[0] - r, p[1] + r], [p[0] + r, p[1] - r]),
+                ] {
+                    canvas.line(
+                        &view,
+                        a,
+                        b,
+                        None,
+                        Pen {
+                            color: [0.0; 3],
+                            width: pen.width + 2.0,
+                            ..pen
+                        },
+                    );
+                    canvas.line(&view, a, b, None, pen);
+                }
+            }
+            EndKind::Escape | EndKind::DistantLight => {}
+        }
+    }
+    // Sample points of everything drawn, so the legend goes where it hides least.
+    let mut drawn = Vec::new();
+    for s in &tree.segments {
+        if let Some((pa, _, pb, _)) = view.project_segment(s.origin, s.end) {
+            drawn.extend((0..=16).map(|k| {
+                let t = k as f32 / 16.0;
+                [pa[0] + (pb[0] - pa[0]) * t, pa[1] + (pb[1] - pa[1]) * t]
+            }));
+        }
+    }
+    let c = view.to_camera(main.center);
+    if c.z > view.near {
+        drawn.extend([view.to_pixel(c); 8]);
+    }
+    draw_legend(&mut canvas, title, unit, &drawn);
+
+    let mut out = img;
+    for (px, c) in out.data.chunks_exact_mut(3).zip(&canvas.rgb) {
+        for k in 0..3 {
+            px[k] = (c[k] * 255.0 + 0.5).clamp(0.0, 255.0) as u8;
+        }
+    }
+    out
+}
+
+/// The main camera as a small white frustum (apex at its centre, base `size` ahead, shaped
+/// like its image) with a dot at the centre; an orthographic camera as its image rectangle
+/// and a line along its direction.
+fn draw_main_camera(
+    canvas: &mut Canvas,
+    view: &View,
+    main: &Camera,
+    size: (u32, u32),
+    len: f32,
+    unit: f32,
+) {
+    let pen = Pen {
+        color: CAMERA_COLOR,
+        width: 1.6 * unit,
+        alpha: 1.0,
+        dash: None,
+    };
+    let side = size.0.max(size.1).max(1) as f32;
+    let (fx, fy) = (size.0 as f32 / side * 0.5, size.1 as f32 / side * 0.5);
+    let (apex, corners) = match main.kind {
+        Projection::Perspective { angle } => {
+            let half = (angle * 0.5).tan() * 2.0;
+            let base = main.center + main.direction * len;
+            let corner = |sx: f32, sy: f32| {
+                base + main.horizontal * (sx * fx * half * len) + main.up * (sy * fy * half * len)
+            };
+            (
+                Some(main.center),
+                [
+                    corner(-1.0, -1.0),
+                    corner(1.0, -1.0),
+                    corner(1.0, 1.0),
+                    corner(-1.0, 1.0),
+                ],
+            )
+        }
+        Projection::Orthographic { size } => {
+            let corner = |sx: f32, sy: f32| {
+                main.center + main.horizontal * (sx * fx * size) + main.up * (sy * fy * size)
+            };
+            let tip = main.center + main.direction * len;
+            canvas.segment3(view, main.center, tip, pen);
+            (
+                None,
+                [
+                    corner(-1.0, -1.0),
+                    corner(1.0, -1.0),
+                    corner(1.0, 1.0),
+                    corner(-1.0, 1.0),
+                ],
+            )
+        }
+    };
+    for k in 0..4 {
+        canvas.segment3(view, corners[k], corners[(k + 1) % 4], pen);
+        if let Some(apex) = apex {
+            canvas.segment3(view, apex, corners[k], pen);
+        }
+    }
+    // The image's top edge is marked by a small tick so the frustum's orientation reads.
+    let top = (corners[2] + corners[3]) * 0.5;
+    let tick = top + main.up * (0.25 * (corners[2] - corners[1]).length());
+    canvas.segment3(view, corners[2], tick, pen);
+    canvas.segment3(view, corners[3], tick, pen);
+    let c = view.to_camera(main.center);
+    if c.z > view.near {
+        canvas.dot(view.to_pixel(c), 3.0 * unit, CAMERA_COLOR);
+    }
+}
+
+/// The title at the top left and the colour key in the other corner (bottom left, bottom right
+/// or top right) that covers the fewest of the `drawn` points, on dark panels.
+fn draw_legend(canvas: &mut Canvas, title: &str, unit: f32, drawn: &[[f32; 2]]) {
+    let s = if unit >= 1.2 { 2 } else { 1 };
+    let line_h = 10 * s;
+    let pad = 4 * s;
+    let title_w = title.chars().count() * 6 * s;
+    canvas.rect(0, 0, title_w + 2 * pad, 7 * s + 2 * pad, [0.0; 3], 0.6);
+    canvas.text(pad, pad, s, title, [1.0; 3]);
+
+    let entries: [(&str, [f32; 3], bool); 7] = [
+        ("eye", kind_color(SegmentKind::Eye, false), false),
+        ("shadow", kind_color(SegmentKind::Shadow, false), false),
+        (
+            "shadow, blocked",
+            kind_color(SegmentKind::Shadow, true),
+            true,
+        ),
+        (
+            "reflected",
+            kind_color(SegmentKind::Reflected, false),
+            false,
+        ),
+        (
+            "transmitted",
+            kind_color(SegmentKind::Transmitted, false),
+            false,
+        ),
+        ("camera", CAMERA_COLOR, false),
+        ("light", LIGHT_COLOR, false),
+    ];
+    let swatch = 18 * s;
+    let box_w = pad * 3 + swatch + 15 * 6 * s;
+    let box_h = entries.len() * line_h + 2 * pad;
+    if box_h + 7 * s + 4 * pad > canvas.height || box_w > canvas.width {
+        return;
+    }
+    let (right, bottom) = (canvas.width - box_w, canvas.height - box_h);
+    let corners = [(0, bottom), (right, bottom), (right, 0)];
+    let hidden = |&(x0, y0): &(usize, usize)| {
+        drawn
+            .iter()
+            .filter(|p| {
+                (x0 as f32..(x0 + box_w) as f32).contains(&p[0])
+                    && (y0 as f32..(y0 + box_h) as f32).contains(&p[1])
+            })
+            .count()
+    };
+    let (x0, y0) = corners
+        .iter()
+        .copied()
+        .min_by_key(|c| hidden(c))
+        .unwrap_or((0, bottom));
+    canvas.rect(x0, y0, box_w, box_h, [0.0; 3], 0.6);
+    for (k, (label, color, dashed)) in entries.iter().enumerate() {
+        let y = y0 + pad + k * line_h;
+        let mid = y + 7 * s / 2;
+        if *label == "light" {
+            canvas.dot(
+                [(x0 + pad + swatch / 2) as f32, mid as f32 + 0.5],
+                3.0 * s as f32,
+                *color,
+            );
+        } else {
+            let pen = Pen {
+                color: *color,
+                width: 2.0 * s as f32,
+                alpha: 1.0,
+                dash: dashed.then_some((5.0 * s as f32, 3.0 * s as f32)),
+            };
+            let dummy = View {
+                center: Vec3::ZERO,
+                forward: Vec3::Z,
+                right: Vec3::X,
+                up: Vec3::Y,
+                tan_half: 1.0,
+                width: 1.0,
+                height: 1.0,
+                side: 1.0,
+                near: 0.0,
+            };
+            let a = [(x0 + pad) as f32, mid as f32 + 0.5];
+            let b = [(x0 + pad + swatch) as f32, mid as f32 + 0.5];
+            canvas.line(&dummy, a, b, None, pen);
+        }
+        canvas.text(x0 + 2 * pad + swatch, y, s, label, [1.0; 3]);
+    }
+}
+
+/// The 5x7 bitmap of `c` (lower case; upper case maps to it), `None` for characters it lacks.
+/// Letters with descenders (g, j, p, q, y) are drawn one row lower, into an eighth row.
+fn glyph(c: char) -> Option<[&'static str; 7]> {
+    let c = c.to_ascii_lowercase();
+    let g = match c {
+        'a' => [
+            ".....", ".....", ".###.", "....#", ".####", "#...#", ".####",
+        ],
+        'b' => [
+            "#....", "#....", "####.", "#...#", "#...#", "#...#", "####.",
+        ],
+        'c' => [
+            ".....", ".....", ".###.", "#....", "#....", "#...#", ".###.",
+        ],
+        'd' => [
+            "....#", "....#", ".####", "#...#", "#...#", "#...#", ".####",
+        ],
+        'e' => [
+            ".....", ".....", ".###.", "#...#", "#####", "#....", ".###.",
+        ],
+        'f' => [
+            "..##.", ".#..#", ".#...", "###..", ".#...", ".#...", ".#...",
+        ],
+        'g' => [
+            ".....", ".####", "#...#", "#...#", ".####", "....#", ".###.",
+        ],
+        'h' => [
+            "#....", "#....", "#.##.", "##..#", "#...#", "#...#", "#...#",
+        ],
+        'i' => [
+            "..#..", ".....", ".##..", "..#..", "..#..", "..#..", ".###.",
+        ],
+        'j' => [
+            "...#.", ".....", "..##.", "...#.", "...#.", "#..#.", ".##..",
+        ],
+        'k' => [
+            "#....", "#....", "#..#.", "#.#..", "##...", "#.#..", "#..#.",
+        ],
+        'l' => [
+            ".##..", "..#..", "..#..", "..#..", "..#..", "..#..", ".###.",
+        ],
+        'm' => [
+            ".....", ".....", "##.#.", "#.#.#", "#.#.#", "#...#", "#...#",
+        ],
+        'n' => [
+            ".....", ".....", "#.##.", "##..#", "#...#", "#...#", "#...#",
+        ],
+        'o' => [
+            ".....", ".....", ".###.", "#...#", "#...#", "#...#", ".###.",
+        ],
+        'p' => [
+            ".....", "####.", "#...#", "#...#", "####.", "#....", "#....",
+        ],
+        'q' => [
+            ".....", ".####", "#...#", "#...#", ".####", "....#", "....#",
+        ],
+        'r' => [
+            ".....", ".....", "#.##.", "##..#", "#....", "#....", "#....",
+        ],
+        's' => [
+            ".....", ".....", ".####", "#....", ".###.", "....#", "####.",
+        ],
+        't' => [
+            ".#...", ".#...", "###..", ".#...", ".#...", ".#..#", "..##.",
+        ],
+        'u' => [
+            ".....", ".....", "#...#", "#...#", "#...#", "#..##", ".##.#",
+        ],
+        'v' => [
+            ".....", ".....", "#...#", "#...#", "#...#", ".#.#.", "..#..",
+        ],
+        'w' => [
+            ".....", ".....", "#...#", "#...#", "#.#.#", "#.#.#", ".#.#.",
+        ],
+        'x' => [
+            ".....", ".....", "#...#", ".#.#.", "..#..", ".#.#.", "#...#",
+        ],
+        'y' => [
+            ".....", "#...#", "#...#", "#...#", ".####", "....#", ".###.",
+        ],
+        'z' => [
+            ".....", ".....", "#####", "...#.", "..#..", ".#...", "#####",
+        ],
+        '0' => [
+            ".###.", "#...#", "#..##", "#.#.#", "##..#", "#...#", ".###.",
+        ],
+        '1' => [
+            "..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###.",
+        ],
+        '2' => [
+            ".###.", "#...#", "....#", "...#.", "..#..", ".#...", "#####",
+        ],
+        '3' => [
+            "#####", "...#.", "..#..", "...#.", "....#", "#...#", ".###.",
+        ],
+        '4' => [
+            "...#.", "..##.", ".#.#.", "#..#.", "#####", "...#.", "...#.",
+        ],
+        '5' => [
+            "#####", "#....", "####.", "....#", "....#", "#...#", ".###.",
+        ],
+        '6' => [
+            "..##.", ".#...", "#....", "####.", "#...#", "#...#", ".###.",
+        ],
+        '7' => [
+            "#####", "....#", "...#.", "..#..", ".#...", ".#...", ".#...",
+        ],
+        '8' => [
+            ".###.", "#...#", "#...#", ".###.", "#...#", "#...#", ".###.",
+        ],
+        '9' => [
+            ".###.", "#...#", "#...#", ".####", "....#", "...#.", ".##..",
+        ],
+        '(' => [
+            "...#.", "..#..", ".#...", ".#...", ".#...", "..#..", "...#.",
+        ],
+        ')' => [
+            ".#...", "..#..", "...#.", "...#.", "...#.", "..#..", ".#...",
+        ],
+        ',' => [
+            ".....", ".....", ".....", ".....", ".##..", "..#..", ".#...",
+        ],
+        '.' => [
+            ".....", ".....", ".....", ".....", ".....", ".##..", ".##..",
+        ],
+        ':' => [
+            ".....", ".##..", ".##..", ".....", ".##..", ".##..", ".....",
+        ],
+        '-' => [
+            ".....", ".....", ".....", "#####", ".....", ".....", ".....",
+        ],
+        '_' => [
+            ".....", ".....", ".....", ".....", ".....", ".....", "#####",
+        ],
+        '/' => [
+            ".....", "....#", "...#.", "..#..", ".#...", "#....", ".....",
+        ],
+        '=' => [
+            ".....", ".....", "#####", ".....", "#####", ".....", ".....",
+        ],
+        ' ' => [
+            ".....", ".....", ".....", ".....", ".....", ".....", ".....",
+        ],
+        _ => return None,
+    };
+    Some(g)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn main_camera() -> Camera {
+        Camera::new(
+            Projection::Perspective { angle: 0.6 },
+            Vec3::new(0.0, 1.0, 6.0),
+            Vec3::new(0.0, -0.2, -1.0),
+            Vec3::Y,
+        )
+    }
+
+    #[test]
+    fn the_default_witness_stands_to_the_right_and_above_looking_at_the_hit() {
+        let main = main_camera();
+        let mut tree = RayTree::new();
+        let ray = crate::math::Ray::new(main.center, main.direction);
+        let hit = crate::shade::Hit {
+            t: 5.0,
+            normal: Vec3::Z,
+            material: 0,
+            prim: 0,
+        };
+        tree.add_ray(SegmentKind::Eye, None, &ray, Some(hit), 0, 1.0);
+        let w = witness_camera(&main, &tree, 200, 100, &WitnessSpec::default());
+        let hit_point = ray.at(5.0);
+        assert!(w.center.x > hit_point.x + 0.5, "to the right: {}", w.center);
+        assert!(
+            w.center.y > main.center.y,
+            "above the main camera: {}",
+            w.center
+        );
+        // Turned 40 degrees about the vertical axis from the main camera's side of the hit.
+        let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).normalize();
+        let turn = flat(main.center - hit_point).angle_between(flat(-w.direction));
+        assert!(
+            (turn.to_degrees() - DEFAULT_YAW_DEG).abs() < 0.5,
+            "{}",
+            turn.to_degrees()
+        );
+        // The main camera and the hit are in the middle 85% of the picture.
+        let view = View::new(&w, 200, 100, 1e-3);
+        for q in [main.center, hit_point] {
+            let c = view.to_camera(q);
+            let p = view.to_pixel(c);
+            assert!(c.z > 0.0, "{q} is behind the witness");
+            assert!(
+                (14.0..186.0).contains(&p[0]) && (7.0..93.0).contains(&p[1]),
+                "{p:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn projection_inverts_the_camera_rays() {
+        let cam = main_camera();
+        let view = View::new(&cam, 300, 200, 1e-3);
+        for (px, py) in [(0.5f32, 0.5f32), (150.0, 100.0), (299.5, 10.25)] {
+            let ray = cam.generate_ray(Camera::sample_point(px, py, 300, 200));
+            let p = view.to_pixel(view.to_camera(ray.at(7.0)));
+            assert!(
+                (p[0] - px).abs() < 1e-3 && (p[1] - py).abs() < 1e-3,
+                "{p:?} vs {px},{py}"
+            );
+            let depth = view.to_camera(ray.at(7.0)).z;
+            assert!((7.0 / view.ray_length(px, py) - depth).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn segments_behind_the_camera_are_clipped_at_the_near_plane() {
+        let cam = main_camera();
+        let view = View::new(&cam, 100, 100, 0.01);
+        let behind = cam.center - cam.direction;
+        assert!(
+            view.project_segment(behind, behind - cam.direction)
+                .is_none()
+        );
+        let ahead = cam.center + cam.direction * 3.0;
+        let (_, za, _, zb) = view.project_segment(behind, ahead).unwrap();
+        assert!((za - 0.01).abs() < 1e-5 && (zb - 3.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn clipping_keeps_the_inside_part_of_a_line() {
+        let (t0, t1) = clip_to_rect([-10.0, 5.0], [20.0, 5.0], 0.0, 0.0, 10.0, 10.0).unwrap();
+        assert!((t0 - 1.0 / 3.0).abs() < 1e-6 && (t1 - 2.0 / 3.0).abs() < 1e-6);
+        assert!(clip_to_rect([-10.0, 50.0], [20.0, 50.0], 0.0, 0.0, 10.0, 10.0).is_none());
+    }
+
+    #[test]
+    fn every_legend_character_has_a_glyph() {
+        for c in
+            "eye shadow, blocked reflected transmitted camera light pixel (12, 345) 67890".chars()
+        {
+            assert!(glyph(c).is_some(), "{c:?}");
+        }
+    }
+}

@@ -1,0 +1,93 @@
+//! Claim: both tracers record the same ray tree for a pixel: the same segments (kind, parent,
+//! depth, primitive, material, light, blocked), in the same order once made canonical, with
+//! origins, end points and weights within 1e-4. Checked on a grid of pixels of every scene in
+//! `scenes/` and of every A4 course scene.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::course_dir;
+use whitted::Tracer;
+use whitted::render::{RenderOptions, trace_ray_tree};
+use whitted::scene::Scene;
+use whitted::shade::ShadeOptions;
+
+/// Compares the trees of a 7x7 grid of pixels; returns how many segments were compared.
+fn compare_trees(path: &Path, shade: ShadeOptions) -> usize {
+    let scene = Scene::load(path).unwrap();
+    let mut opts = RenderOptions {
+        width: 120,
+        height: 90,
+        shade,
+        ..RenderOptions::default()
+    };
+    let mut segments = 0;
+    for gy in 0..7 {
+        for gx in 0..7 {
+            let (x, y) = (8 + gx * 17, 6 + gy * 13);
+            opts.tracer = Tracer::Reference;
+            let (reference, _) = trace_ray_tree(&scene, &opts, x, y).unwrap();
+            opts.tracer = Tracer::Packet;
+            let (packet, _) = trace_ray_tree(&scene, &opts, x, y).unwrap();
+            reference.validate().unwrap();
+            packet.validate().unwrap();
+            if let Some(diff) = reference.first_difference(&packet, 1e-4) {
+                panic!("{} pixel ({x}, {y}): {diff}", path.display());
+            }
+            segments += reference.segments.len();
+        }
+    }
+    segments
+}
+
+fn full() -> ShadeOptions {
+    ShadeOptions {
+        shadows: true,
+        shade_back: true,
+        bounces: 5,
+        ..ShadeOptions::default()
+    }
+}
+
+#[test]
+fn both_tracers_record_the_same_trees_on_our_scenes() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "txt"))
+        .collect();
+    scenes.sort();
+    for path in scenes {
+        let n = compare_trees(&path, full());
+        assert!(n > 49, "{}: only {n} segments", path.display());
+        compare_trees(
+            &path,
+            ShadeOptions {
+                transparent_shadows: true,
+                fresnel: true,
+                ..full()
+            },
+        );
+    }
+}
+
+#[test]
+fn both_tracers_record_the_same_trees_on_the_a4_course_scenes() {
+    let Some(course) = course_dir() else {
+        eprintln!("skipped: WHITTED_COURSE_DIR is not set");
+        return;
+    };
+    let dir = course.join("assignment4");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "txt"))
+        .collect();
+    scenes.sort();
+    assert_eq!(scenes.len(), 14);
+    for path in scenes {
+        compare_trees(&path, full());
+    }
+}
