@@ -29,6 +29,8 @@ USAGE:
     whitted render SCENE -o OUT.png [OPTIONS]
     whitted render SCENE --ray-tree X Y TREE.json [--ray-tree-image TREE.png] [OPTIONS]
     whitted -input SCENE -size W H -output OUT.tga [COURSE OPTIONS]   (the course's command lines)
+    whitted bench [--scene NAME|all] [--threads N] [--reps N] [--width W] [--height H]
+                                   (ray throughput; see `whitted bench --help`)
 
 OUTPUT (format by extension: .png, .tga, .ppm; written atomically):
     -o, --output FILE          colour image
@@ -123,6 +125,7 @@ pub fn run(args: Vec<OsString>) -> Result<()> {
             Ok(())
         }
         Some("render") => execute(parse_args(&args[1..], true)?),
+        Some("bench") => crate::bench::run(&args[1..]),
         Some(a) if a.starts_with('-') => execute(parse_args(&args, false)?),
         Some(other) => Err(Error::Usage(format!(
             "unknown command `{other}`: expected `render`, `bench` or course options like -input"

@@ -19,8 +19,10 @@
 //! stats.rs: RayCounts (filled by the tracers) + phase times -> --stats; progress.rs: the bar
 //! ```
 //!
-//! `main.rs` is a thin wrapper around [`cli::run`].
+//! `main.rs` is a thin wrapper around [`cli::run`]; [`bench`] is `whitted bench`, the throughput
+//! benchmark shared with the Embree harness.
 
+pub mod bench;
 pub mod bvh;
 pub mod cli;
 pub mod error;
