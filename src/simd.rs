@@ -119,12 +119,6 @@ pub fn max(a: F32x8, b: F32x8) -> F32x8 {
     a.max(b)
 }
 
-/// Lane-wise `a * b + c`, fused (one rounding).
-#[inline(always)]
-pub fn mul_add(a: F32x8, b: F32x8, c: F32x8) -> F32x8 {
-    a.mul_add(b, c)
-}
-
 /// Lane-wise square root.
 #[inline(always)]
 pub fn sqrt(a: F32x8) -> F32x8 {

@@ -237,3 +237,26 @@ fn a_scene_geometry_validates() {
     g.validate_bvh().unwrap();
     assert!(!g.bvh().is_empty());
 }
+
+#[test]
+fn packet_traversal_finds_the_nearer_of_two_hits_on_a_shared_edge() {
+    // Regression: on torus1m the packet traversal culled the node of the nearer of two
+    // triangles sharing an edge (hits one ulp apart): the fused slab test rounded the box
+    // entry above the hit. Packet 68260 of the bench's 1024x1024 camera rays, lane 4.
+    let mut g = whitted::bench::BenchScene::from_name("torus1m")
+        .unwrap()
+        .geometry();
+    g.build_bvh();
+    let rays = whitted::bench::generate_camera_rays(1024, 1024).unwrap();
+    let packets = rays.packets();
+    for index in [68260, 68259, 68261] {
+        let p = &packets.packets[index];
+        let mut hit = HitPacket::with_tmax(p.tmax);
+        g.closest_hit_packet(&p.rays, &mut hit);
+        for lane in 0..LANES {
+            let single = g.closest_hit(&p.rays.ray(lane), 0.0, f32::INFINITY);
+            let got = hit.lane(lane).map(|(t, prim)| (t, prim as u32));
+            assert_eq!(got, single, "packet {index} lane {lane}");
+        }
+    }
+}

@@ -15,7 +15,7 @@ use std::ops::Range;
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, le, lt, max, min, mul_add, select};
+use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, le, lt, max, min, select};
 
 /// The deepest a tree gets (the traversal stacks are sized by it).
 pub const MAX_DEPTH: usize = 64;
@@ -135,10 +135,23 @@ pub struct Bvh {
     pub nodes: Vec<BvhNode>,
 }
 
-/// Per-packet values the box test reuses: reciprocal directions and `-origin / dir`.
+/// Widens a distance by the relative rounding error of the slab test, in the direction that
+/// keeps culling conservative (also for the negative distances of orthographic rays).
+#[inline(always)]
+fn widen(t: f32) -> f32 {
+    t + t.abs() * (ROBUST - 1.0)
+}
+
+/// [`widen`] for 8 lanes.
+#[inline(always)]
+fn widen_packet(t: F32x8) -> F32x8 {
+    t + t.abs() * F32x8::splat(ROBUST - 1.0)
+}
+
+/// Per-packet values the box test reuses: origins and reciprocal directions.
 struct PacketSlabs {
+    origin: Vec3x8,
     inv: Vec3x8,
-    neg_org_inv: Vec3x8,
 }
 
 impl PacketSlabs {
@@ -150,40 +163,39 @@ impl PacketSlabs {
             let small = lt(d.abs(), tiny);
             F32x8::splat(1.0) / select(small, select(lt(d, F32x8::splat(0.0)), -tiny, tiny), d)
         };
-        let inv = Vec3x8 {
-            x: safe(rays.dir.x),
-            y: safe(rays.dir.y),
-            z: safe(rays.dir.z),
-        };
-        let neg_org_inv = Vec3x8 {
-            x: -(rays.origin.x * inv.x),
-            y: -(rays.origin.y * inv.y),
-            z: -(rays.origin.z * inv.z),
-        };
-        PacketSlabs { inv, neg_org_inv }
+        PacketSlabs {
+            origin: rays.origin,
+            inv: Vec3x8 {
+                x: safe(rays.dir.x),
+                y: safe(rays.dir.y),
+                z: safe(rays.dir.z),
+            },
+        }
     }
 
     /// Lanes whose ray meets the box within `(tmin, tmax)`, and their entry distances.
+    /// `(plane - origin) * inv` (not a fused `plane * inv - origin * inv`) keeps the error
+    /// relative to the distance itself, which the widening by `ROBUST` then covers.
     #[inline(always)]
     fn test(&self, n: &BvhNode, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
-        let slab = |lo: f32, hi: f32, inv: F32x8, noi: F32x8| {
-            let a = mul_add(F32x8::splat(lo), inv, noi);
-            let b = mul_add(F32x8::splat(hi), inv, noi);
+        let slab = |lo: f32, hi: f32, o: F32x8, inv: F32x8| {
+            let a = (F32x8::splat(lo) - o) * inv;
+            let b = (F32x8::splat(hi) - o) * inv;
             (min(a, b), max(a, b))
         };
-        let (x0, x1) = slab(n.min[0], n.max[0], self.inv.x, self.neg_org_inv.x);
-        let (y0, y1) = slab(n.min[1], n.max[1], self.inv.y, self.neg_org_inv.y);
-        let (z0, z1) = slab(n.min[2], n.max[2], self.inv.z, self.neg_org_inv.z);
+        let (x0, x1) = slab(n.min[0], n.max[0], self.origin.x, self.inv.x);
+        let (y0, y1) = slab(n.min[1], n.max[1], self.origin.y, self.inv.y);
+        let (z0, z1) = slab(n.min[2], n.max[2], self.origin.z, self.inv.z);
         let near = max(max(x0, y0), max(z0, tmin));
-        let far = min(min(x1, y1), min(z1, tmax)) * F32x8::splat(ROBUST);
+        let far = widen_packet(min(min(x1, y1), min(z1, tmax)));
         (le(near, far), near)
     }
 }
 
 /// Single-ray twin of [`PacketSlabs`].
 struct RaySlabs {
+    origin: Vec3,
     inv: Vec3,
-    neg_org_inv: Vec3,
 }
 
 impl RaySlabs {
@@ -196,20 +208,19 @@ impl RaySlabs {
                 d
             }
         };
-        let inv = Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z));
         RaySlabs {
-            inv,
-            neg_org_inv: -(ray.origin * inv),
+            origin: ray.origin,
+            inv: Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z)),
         }
     }
 
     /// The entry distance if the ray meets the box within `(tmin, tmax)`.
     #[inline(always)]
     fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> Option<f32> {
-        let lo = Vec3::from(n.min).mul_add(self.inv, self.neg_org_inv);
-        let hi = Vec3::from(n.max).mul_add(self.inv, self.neg_org_inv);
+        let lo = (Vec3::from(n.min) - self.origin) * self.inv;
+        let hi = (Vec3::from(n.max) - self.origin) * self.inv;
         let near = lo.min(hi).max_element().max(tmin);
-        let far = lo.max(hi).min_element().min(tmax) * ROBUST;
+        let far = widen(lo.max(hi).min_element().min(tmax));
         (near <= far).then_some(near)
     }
 }
@@ -268,7 +279,7 @@ impl Bvh {
                 lanes,
             } = stack[top];
             // cull: no lane of this subtree can hit nearer than its current hit
-            let mut lanes = lanes & lt(near, *tmax);
+            let mut lanes = lanes & le(near, widen_packet(*tmax));
             if !any(lanes) {
                 continue;
             }
@@ -432,7 +443,7 @@ impl Bvh {
         while top > 0 {
             top -= 1;
             let (mut node, near) = stack[top];
-            if near >= *tmax {
+            if near > widen(*tmax) {
                 continue;
             }
             loop {
