@@ -154,6 +154,14 @@ pub fn from_lanes(values: [f32; LANES]) -> F32x8 {
     F32x8::new(values)
 }
 
+/// The integer parts of the first three lanes of `v` (non-negative, below 2^31): a plain
+/// truncating conversion, without the saturation checks of `as usize`.
+#[inline(always)]
+pub fn trunc3(v: crate::math::Vec4) -> [usize; 3] {
+    let t = wide::f32x4::new(v.to_array()).fast_trunc_int().to_array();
+    [t[0] as usize, t[1] as usize, t[2] as usize]
+}
+
 /// The lanes as an array.
 #[inline(always)]
 pub fn lanes(a: F32x8) -> [f32; LANES] {

@@ -12,10 +12,11 @@
 use glam::Vec4;
 
 use super::{Aabb, Bvh, BvhNode, MAX_DEPTH};
+use crate::simd::trunc3;
 
 /// The most primitives a leaf holds.
 pub const MAX_LEAF: usize = 4;
-/// Bins per axis.
+/// Bins per axis (a power of two).
 pub const BINS: usize = 16;
 /// Cost of visiting a node relative to intersecting one primitive.
 const TRAVERSAL_COST: f32 = 1.0;
@@ -111,7 +112,7 @@ pub fn build(bounds: &[Aabb], tags: &[u8]) -> (Bvh, Vec<u32>) {
         nodes: Vec::with_capacity(n.max(1)),
     };
     if n > 0 {
-        b.node(&mut refs, 0, all, centroids, 0);
+        b.node(&mut refs, 0, all, centroids, 0, true);
     }
     let order = refs.iter().map(PrimRef::id).collect();
     (Bvh { nodes: b.nodes }, order)
@@ -142,12 +143,14 @@ impl Builder {
         bounds: Box4,
         centroids: Box4,
         depth: usize,
+        parent_mixed: bool,
     ) -> u32 {
         let index = self.nodes.len() as u32;
         let count = refs.len();
         self.nodes
             .push(BvhNode::leaf(&bounds.aabb(), first as u32, count as u32));
-        let mixed = refs.iter().any(|r| r.tag() != refs[0].tag());
+        // Only a node whose parent mixed tags can itself mix them.
+        let mixed = parent_mixed && refs.iter().any(|r| r.tag() != refs[0].tag());
         if count <= 1 && !mixed {
             return index;
         }
@@ -183,9 +186,9 @@ impl Builder {
             }
         };
         let (left_refs, right_refs) = refs.split_at_mut(mid);
-        let l = self.node(left_refs, first, left.0, left.1, depth + 1);
+        let l = self.node(left_refs, first, left.0, left.1, depth + 1, mixed);
         debug_assert_eq!(l, index + 1);
-        let r = self.node(right_refs, first + mid, right.0, right.1, depth + 1);
+        let r = self.node(right_refs, first + mid, right.0, right.1, depth + 1, mixed);
         self.nodes[index as usize] = BvhNode::interior(&bounds.aabb(), r);
         index
     }
@@ -214,24 +217,39 @@ fn bin_scale(centroids: &Box4) -> Vec4 {
 /// The bin of a (doubled) centroid on each axis.
 #[inline(always)]
 fn bin_index(c: Vec4, lo: Vec4, scale: Vec4) -> [usize; 3] {
-    let b = ((c - lo) * scale).min(Vec4::splat((BINS - 1) as f32));
-    [b.x as usize, b.y as usize, b.z as usize]
+    let b = ((c - lo) * scale).clamp(Vec4::ZERO, Vec4::splat((BINS - 1) as f32));
+    trunc3(b)
 }
 
 /// Bins every reference on all three axes in one pass and returns the cheapest split by SAH.
 fn best_split(refs: &[PrimRef], centroids: &Box4) -> Option<Split> {
     let scale = bin_scale(centroids);
     let lo = centroids.min;
-    let mut counts = [[0u32; BINS]; 3];
-    let mut boxes = [[Box4::EMPTY; BINS]; 3];
-    for r in refs {
+    // Two sets of bins, filled alternately: consecutive primitives often fall in the same bin,
+    // and one set would chain every update through memory to the previous one.
+    let mut counts = [[[0u32; BINS]; 3]; 2];
+    let mut boxes = [[[Box4::EMPTY; BINS]; 3]; 2];
+    let mut add = |set: usize, r: &PrimRef| {
         let bins = bin_index(r.centroid2(), lo, scale);
         for axis in 0..3 {
-            let b = bins[axis];
-            counts[axis][b] += 1;
-            boxes[axis][b].grow(r.min, r.max);
+            // (the mask only tells the compiler the index is in range)
+            let b = bins[axis] & (BINS - 1);
+            counts[set][axis][b] += 1;
+            boxes[set][axis][b].grow(r.min, r.max);
         }
+    };
+    let mut pairs = refs.chunks_exact(2);
+    for pair in &mut pairs {
+        add(0, &pair[0]);
+        add(1, &pair[1]);
     }
+    for r in pairs.remainder() {
+        add(0, r);
+    }
+    let counts: [[u32; BINS]; 3] =
+        std::array::from_fn(|a| std::array::from_fn(|b| counts[0][a][b] + counts[1][a][b]));
+    let boxes: [[Box4; BINS]; 3] =
+        std::array::from_fn(|a| std::array::from_fn(|b| boxes[0][a][b].union(&boxes[1][a][b])));
     let mut best: Option<Split> = None;
     for axis in 0..3 {
         if scale[axis] == 0.0 {
