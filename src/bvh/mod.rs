@@ -20,10 +20,6 @@ use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, le, lt, max, min, sele
 /// The deepest a tree gets (the traversal stacks are sized by it).
 pub const MAX_DEPTH: usize = 64;
 
-/// Packet traversal continues ray by ray below a node fewer lanes than this enter (see
-/// PERF.md, "single-ray switch").
-pub const SINGLE_RAY_BELOW: u32 = 3;
-
 /// Relative widening of the slab test's exit distance, so that rounding never culls a box a
 /// ray touches (1 + 2 gamma(3), Pharr et al.).
 const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -240,19 +236,15 @@ impl Bvh {
     }
 
     /// Visits, for the active lanes of `rays`, every leaf one of them may hit nearer than its
-    /// `tmax` lane; `leaf(state, range, rays, tmax)` tests the leaf's primitives for the
-    /// packet's active lanes and lowers their `tmax` where it finds nearer hits. Nearer
-    /// children go first so `tmax` shrinks early and culls more. When fewer than
-    /// [`SINGLE_RAY_BELOW`] lanes enter a subtree, each continues alone through
-    /// [`Bvh::closest`]'s traversal with `leaf1(state, range, lane, ray, tmin, t)` (Embree's
-    /// switch to single rays). `state` is the caller's, shared by both leaf tests.
-    pub fn closest_packet<S>(
+    /// `tmax` lane; `leaf(range, rays, tmax)` tests the leaf's primitives for the packet's
+    /// active lanes and lowers their `tmax` where it finds nearer hits. Nearer children go
+    /// first so `tmax` shrinks early and culls more. The packet stays together to the leaves
+    /// however few lanes remain (a switch to single rays measured slower: PERF.md).
+    pub fn closest_packet(
         &self,
         rays: &RayPacket,
         tmax: &mut F32x8,
-        state: &mut S,
-        mut leaf: impl FnMut(&mut S, Range<u32>, &RayPacket, &mut F32x8),
-        mut leaf1: impl FnMut(&mut S, Range<u32>, usize, &Ray, f32, &mut f32),
+        mut leaf: impl FnMut(Range<u32>, &RayPacket, &mut F32x8),
     ) {
         if self.nodes.is_empty() || !any(rays.active) {
             return;
@@ -287,22 +279,7 @@ impl Bvh {
                 let n = &self.nodes[node as usize];
                 if n.is_leaf() {
                     local.active = lanes;
-                    leaf(state, n.prims(), &local, tmax);
-                    break;
-                }
-                let bits = bitmask(lanes);
-                if bits.count_ones() < SINGLE_RAY_BELOW {
-                    // few lanes left: finish this subtree one ray at a time
-                    let (tmins, mut ts) =
-                        (crate::simd::lanes(rays.tmin), crate::simd::lanes(*tmax));
-                    for lane in (0..8).filter(|l| bits >> l & 1 == 1) {
-                        let ray = rays.ray(lane);
-                        let tmin = tmins[lane];
-                        self.closest_subtree(node, &ray, tmin, &mut ts[lane], |r, t| {
-                            leaf1(state, r, lane, &ray, tmin, t)
-                        });
-                    }
-                    *tmax = crate::simd::from_lanes(ts);
+                    leaf(n.prims(), &local, tmax);
                     break;
                 }
                 let (left, right) = (node + 1, n.first);
@@ -344,7 +321,6 @@ impl Bvh {
         rays: &RayPacket,
         tmax: F32x8,
         mut leaf: impl FnMut(Range<u32>, &RayPacket) -> Mask,
-        mut leaf1: impl FnMut(Range<u32>, &Ray, f32, f32) -> bool,
     ) -> Mask {
         let mut occluded = crate::simd::mask_none();
         if self.nodes.is_empty() || !any(rays.active) {
@@ -369,24 +345,6 @@ impl Bvh {
                     local.active = lanes;
                     occluded |= leaf(n.prims(), &local);
                     // early exit: every active lane is blocked
-                    if all(occluded | !rays.active) {
-                        return occluded;
-                    }
-                    break;
-                }
-                let bits = bitmask(lanes);
-                if bits.count_ones() < SINGLE_RAY_BELOW {
-                    // few lanes left: finish this subtree one ray at a time
-                    let (tmins, tmaxs) = (crate::simd::lanes(rays.tmin), crate::simd::lanes(tmax));
-                    let mut blocked = 0;
-                    for lane in (0..8).filter(|l| bits >> l & 1 == 1) {
-                        let ray = rays.ray(lane);
-                        let (t0, t1) = (tmins[lane], tmaxs[lane]);
-                        if self.occluded_subtree(node, &ray, t0, t1, |r| leaf1(r, &ray, t0, t1)) {
-                            blocked |= 1 << lane;
-                        }
-                    }
-                    occluded |= crate::simd::mask_from_bits(blocked);
                     if all(occluded | !rays.active) {
                         return occluded;
                     }
@@ -417,28 +375,17 @@ impl Bvh {
         ray: &Ray,
         tmin: f32,
         tmax: &mut f32,
-        leaf: impl FnMut(Range<u32>, &mut f32),
-    ) {
-        if !self.nodes.is_empty() {
-            self.closest_subtree(0, ray, tmin, tmax, leaf);
-        }
-    }
-
-    /// [`Bvh::closest`] below node `root` only.
-    fn closest_subtree(
-        &self,
-        root: u32,
-        ray: &Ray,
-        tmin: f32,
-        tmax: &mut f32,
         mut leaf: impl FnMut(Range<u32>, &mut f32),
     ) {
+        if self.nodes.is_empty() {
+            return;
+        }
         let slabs = RaySlabs::new(ray);
-        let Some(near) = slabs.test(&self.nodes[root as usize], tmin, *tmax) else {
+        let Some(near) = slabs.test(&self.nodes[0], tmin, *tmax) else {
             return;
         };
         let mut stack = [(0u32, 0.0f32); MAX_DEPTH * 2];
-        stack[0] = (root, near);
+        stack[0] = (0, near);
         let mut top = 1;
         while top > 0 {
             top -= 1;
@@ -480,27 +427,18 @@ impl Bvh {
         ray: &Ray,
         tmin: f32,
         tmax: f32,
-        leaf: impl FnMut(Range<u32>) -> bool,
-    ) -> bool {
-        !self.nodes.is_empty() && self.occluded_subtree(0, ray, tmin, tmax, leaf)
-    }
-
-    /// [`Bvh::occluded`] below node `root` only.
-    fn occluded_subtree(
-        &self,
-        root: u32,
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
         mut leaf: impl FnMut(Range<u32>) -> bool,
     ) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
         let slabs = RaySlabs::new(ray);
         let mut stack = [0u32; MAX_DEPTH * 2];
         let mut top = 0;
-        if slabs.test(&self.nodes[root as usize], tmin, tmax).is_none() {
+        if slabs.test(&self.nodes[0], tmin, tmax).is_none() {
             return false;
         }
-        let mut node = root;
+        let mut node = 0;
         loop {
             let n = &self.nodes[node as usize];
             if n.is_leaf() {

@@ -29,7 +29,7 @@ use crate::math::{Mat3, Mat4, Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::scene::{Object, Scene};
 use crate::shade::Hit;
-use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32, set_lane_i32};
+use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 use std::ops::Range;
 
@@ -274,18 +274,9 @@ impl Geometry {
         if self.bvh.is_empty() {
             self.closest_in_packet(self.bounded_range(), rays, t, prim);
         } else {
-            self.bvh.closest_packet(
-                rays,
-                t,
-                prim,
-                |prim, range, rays, t| self.closest_in_packet(range, rays, t, prim),
-                |prim, range, lane, ray, tmin, t| {
-                    if let Some((ti, p)) = self.closest_in(range, ray, tmin, *t) {
-                        *t = ti;
-                        set_lane_i32(prim, lane, p as i32);
-                    }
-                },
-            );
+            self.bvh.closest_packet(rays, t, |range, rays, t| {
+                self.closest_in_packet(range, rays, t, prim)
+            });
         }
         self.closest_in_packet(self.planes_range(), rays, t, prim);
     }
@@ -297,10 +288,7 @@ impl Geometry {
         let mut occluded = if self.bvh.is_empty() {
             leaf(self.bounded_range(), rays)
         } else {
-            self.bvh
-                .occluded_packet(rays, tmax, leaf, |range, ray, t0, t1| {
-                    self.occluded_in(range, ray, t0, t1)
-                })
+            self.bvh.occluded_packet(rays, tmax, leaf)
         };
         let rest = !occluded & rays.active;
         if any(rest) && !self.planes.is_empty() {
