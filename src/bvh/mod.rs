@@ -15,7 +15,9 @@ use std::ops::Range;
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, le, lt, max, min, select};
+use crate::simd::{
+    F32x8, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select,
+};
 
 /// The deepest a tree gets (the traversal stacks are sized by it).
 pub const MAX_DEPTH: usize = 64;
@@ -225,8 +227,20 @@ impl RaySlabs {
 #[derive(Clone, Copy)]
 struct Pending {
     node: u32,
-    near: F32x8,
-    lanes: Mask,
+    near: [f32; 8],
+    lanes: [f32; 8],
+}
+
+impl Pending {
+    /// An entry from SIMD values (plain arrays keep the stack small and cheap to set up).
+    #[inline(always)]
+    fn new(node: u32, near: F32x8, lanes: Mask) -> Pending {
+        Pending {
+            node,
+            near: crate::simd::lanes(near),
+            lanes: crate::simd::lanes(lanes),
+        }
+    }
 }
 
 impl Bvh {
@@ -251,25 +265,20 @@ impl Bvh {
         }
         let slabs = PacketSlabs::new(rays);
         let mut local = *rays;
+        // At most one entry per level is pending.
         let mut stack = [Pending {
             node: 0,
-            near: F32x8::splat(0.0),
-            lanes: rays.active,
-        }; MAX_DEPTH * 2];
+            near: [0.0; 8],
+            lanes: [0.0; 8],
+        }; MAX_DEPTH];
         let (hit, near) = slabs.test(&self.nodes[0], rays.tmin, *tmax);
-        stack[0] = Pending {
-            node: 0,
-            near,
-            lanes: hit & rays.active,
-        };
+        stack[0] = Pending::new(0, near, hit & rays.active);
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let Pending {
-                mut node,
-                near,
-                lanes,
-            } = stack[top];
+            let entry = &stack[top];
+            let mut node = entry.node;
+            let (near, lanes) = (from_lanes(entry.near), from_lanes(entry.lanes));
             // cull: no lane of this subtree can hit nearer than its current hit
             let mut lanes = lanes & le(near, widen_packet(*tmax));
             if !any(lanes) {
@@ -300,11 +309,7 @@ impl Bvh {
                         } else {
                             ((right, hr, nr), (left, hl, nl))
                         };
-                        stack[top] = Pending {
-                            node: second.0,
-                            near: second.2,
-                            lanes: second.1,
-                        };
+                        stack[top] = Pending::new(second.0, second.2, second.1);
                         top += 1;
                         (node, lanes) = (first.0, first.1);
                     }
@@ -328,7 +333,7 @@ impl Bvh {
         }
         let slabs = PacketSlabs::new(rays);
         let mut local = *rays;
-        let mut stack = [(0u32, rays.active); MAX_DEPTH * 2];
+        let mut stack = [(0u32, rays.active); MAX_DEPTH];
         let (hit, _) = slabs.test(&self.nodes[0], rays.tmin, tmax);
         stack[0] = (0, hit & rays.active);
         let mut top = 1;
@@ -384,7 +389,7 @@ impl Bvh {
         let Some(near) = slabs.test(&self.nodes[0], tmin, *tmax) else {
             return;
         };
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH * 2];
+        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
         stack[0] = (0, near);
         let mut top = 1;
         while top > 0 {
@@ -433,7 +438,7 @@ impl Bvh {
             return false;
         }
         let slabs = RaySlabs::new(ray);
-        let mut stack = [0u32; MAX_DEPTH * 2];
+        let mut stack = [0u32; MAX_DEPTH];
         let mut top = 0;
         if slabs.test(&self.nodes[0], tmin, tmax).is_none() {
             return false;
