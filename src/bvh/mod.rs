@@ -15,9 +15,7 @@ use std::ops::Range;
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{
-    F32x8, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select,
-};
+use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select};
 
 /// The deepest a tree gets (the traversal stacks are sized by it).
 pub const MAX_DEPTH: usize = 64;

@@ -4,10 +4,15 @@
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, eq, ge, gt, le, lt};
+use crate::simd::{F32x8, Mask, Vec3x8, eq, ge, gt, le, lt, select};
 
 /// The `t` where the ray crosses the triangle `(v0, v0 + e1, v0 + e2)`, if inside
 /// `(tmin, tmax)`. Both sides count; rays in the triangle's plane miss.
+///
+/// Moller-Trumbore rearranged as Embree does: with `s = o - v0`, `R = s x d` and the
+/// unnormalised normal `Ng = e1 x e2`, the determinant is `det = -(d . Ng)` and
+/// `u = (R . e2) / det`, `v = -(R . e1) / det`, `t = (s . Ng) / det`. The tests run on the
+/// numerators scaled by the sign of `det`; `t` is divided out only for rays inside.
 #[inline]
 pub fn intersect_triangle(
     v0: Vec3,
@@ -17,23 +22,20 @@ pub fn intersect_triangle(
     tmin: f32,
     tmax: f32,
 ) -> Option<f32> {
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if det == 0.0 {
-        return None;
-    }
-    let inv = 1.0 / det;
+    let ng = e1.cross(e2);
     let s = ray.origin - v0;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    let r = s.cross(ray.dir);
+    let det = -ray.dir.dot(ng);
+    let sign = if det < 0.0 { -1.0 } else { 1.0 };
+    let abs_det = det.abs();
+    let u = r.dot(e2) * sign;
+    let v = -r.dot(e1) * sign;
+    let t = s.dot(ng) * sign;
+    let inside = det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= abs_det;
+    if !inside {
         return None;
     }
-    let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
-    if !(v >= 0.0 && u + v <= 1.0) {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
+    let t = t / abs_det;
     (t > tmin && t < tmax).then_some(t)
 }
 
@@ -46,19 +48,19 @@ pub fn intersect_triangle_packet(
     rays: &RayPacket,
     tmax: F32x8,
 ) -> (Mask, F32x8) {
-    let (zero, one) = (F32x8::splat(0.0), F32x8::splat(1.0));
-    let (e1, e2) = (Vec3x8::splat(e1), Vec3x8::splat(e2));
-    let p = rays.dir.cross(e2);
-    let det = e1.dot(p);
-    let inv = one / det;
+    let zero = F32x8::splat(0.0);
+    let ng = Vec3x8::splat(e1.cross(e2));
     let s = rays.origin - Vec3x8::splat(v0);
-    let u = s.dot(p) * inv;
-    let q = s.cross(e1);
-    let v = rays.dir.dot(q) * inv;
-    let t = e2.dot(q) * inv;
-    let inside = ge(u, zero) & le(u, one) & ge(v, zero) & le(u + v, one);
-    let hit = inside & gt(t, rays.tmin) & lt(t, tmax) & rays.active;
-    (hit & !eq(det, zero), t)
+    let r = s.cross(rays.dir);
+    let det = -rays.dir.dot(ng);
+    let sign = select(lt(det, zero), F32x8::splat(-1.0), F32x8::splat(1.0));
+    let abs_det = det.abs();
+    let u = r.dot(Vec3x8::splat(e2)) * sign;
+    let v = -r.dot(Vec3x8::splat(e1)) * sign;
+    let t = s.dot(ng) * sign;
+    let inside = !eq(det, zero) & ge(u, zero) & ge(v, zero) & le(u + v, abs_det);
+    let t = t / abs_det;
+    (inside & gt(t, rays.tmin) & lt(t, tmax) & rays.active, t)
 }
 
 #[cfg(test)]
