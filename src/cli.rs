@@ -42,6 +42,7 @@ RENDERING (defaults in brackets):
     --tracer reference|packet  which tracer renders [reference]
     --threads N                worker threads [all cores]; output is identical for any N
     --max-pixels N             refuse larger images [67108864]
+    --max-bounces N            refuse larger bounce counts [1000]
     --stats                    print timings and ray counts to stderr
 
 COURSE OPTIONS (single dash, as in the handouts): -input -output -size -depth -normals -shadows
@@ -188,6 +189,7 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
             }
             "threads" => cmd.render.threads = number(opt, it.next(), "a thread count")?,
             "max_pixels" => cmd.render.max_pixels = number(opt, it.next(), "a pixel count")?,
+            "max_bounces" => cmd.render.max_bounces = number(opt, it.next(), "a bounce count")?,
             "stats" => cmd.stats = true,
             "gui" | "gouraud" => cmd.notes.push(format!(
                 "note: {opt} ignored: whitted has no OpenGL preview"

@@ -140,6 +140,13 @@ pub fn check_writable(path: &Path, width: u32, height: u32) -> Result<()> {
             path.display()
         )));
     }
+    if path.is_dir() {
+        return Err(Error::io(
+            path,
+            "write image",
+            std::io::Error::other("it is a folder"),
+        ));
+    }
     let tmp = temp_path(path);
     let file = fs::OpenOptions::new()
         .write(true)
