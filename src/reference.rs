@@ -35,7 +35,9 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             id,
         } => match intersect_sphere(*center, radius * radius, ray, tmin, limit) {
             Some(t) => {
-                let normal = (ray.at(t) - *center).normalize();
+                // A ray through the very centre of a tiny sphere has no direction to normalise:
+                // face it back along the ray rather than produce NaN.
+                let normal = (ray.at(t) - *center).normalize_or(-ray.dir.normalize());
                 *best = Some(Hit {
                     t,
                     normal,
@@ -171,7 +173,7 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
         let m = scene.materials[hit.material as usize]
             .phong()
             .expect("textures are rejected before rendering");
-        light *= m.transparent;
+        light = shade::saturate(light * m.transparent);
         if light == Vec3::ZERO {
             break;
         }
@@ -287,6 +289,6 @@ impl<'s> ReferenceTracer<'s> {
                     tree,
                 );
         }
-        color
+        shade::saturate(color)
     }
 }
