@@ -52,6 +52,7 @@ RENDERING (defaults in brackets):
     --tracer reference|packet  which tracer renders [packet]
     --threads N                worker threads [all cores]; output is identical for any N
     --max-pixels N             refuse larger images [67108864]
+    --max-bounces N            refuse larger bounce counts [1000]
     --stats                    print ray counts by kind and bounce, time per phase, Mrays/s
                                and peak memory to stderr, then one `stats: key=value ...` line
                                (a progress bar shows on stderr, only when it is a terminal,
@@ -233,6 +234,7 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
             }
             "threads" => cmd.render.threads = number(opt, it.next(), "a thread count")?,
             "max_pixels" => cmd.render.max_pixels = number(opt, it.next(), "a pixel count")?,
+            "max_bounces" => cmd.render.max_bounces = number(opt, it.next(), "a bounce count")?,
             "stats" => cmd.stats = true,
             "ray_tree" => {
                 let x = number(opt, it.next(), "a pixel column X")?;

@@ -41,7 +41,8 @@ pub fn refract(dir: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
     let i = -dir.normalize();
     let cos_i = n.dot(i);
     let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-    if k < 0.0 {
+    // NaN comes from an overflowing eta at normal incidence: no transmitted ray either.
+    if k < 0.0 || k.is_nan() {
         return None;
     }
     Some((n * (eta * cos_i - k.sqrt()) - i * eta).normalize())
@@ -70,7 +71,7 @@ pub fn schlick(cos_i: f32, n_i: f32, n_t: f32) -> f32 {
 /// Transforms a normal by the inverse transpose `normal_matrix` and normalises it.
 #[inline]
 pub fn transform_normal(normal_matrix: &Mat3, n: Vec3) -> Vec3 {
-    (*normal_matrix * n).normalize()
+    (*normal_matrix * n).normalize_or(n)
 }
 
 #[cfg(test)]

@@ -144,8 +144,16 @@ pub fn check_writable(path: &Path, width: u32, height: u32) -> Result<()> {
 }
 
 /// Checks that a file can be created beside `path` (so a later atomic write of it can
-/// succeed); `action` names the write in the error ("write image", "write ray tree").
+/// succeed, and `path` is not a folder); `action` names the write in the error ("write
+/// image", "write ray tree").
 pub fn check_creatable(path: &Path, action: &'static str) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::io(
+            path,
+            action,
+            std::io::Error::other("it is a folder"),
+        ));
+    }
     let tmp = temp_path(path);
     let file = fs::OpenOptions::new()
         .write(true)

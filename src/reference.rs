@@ -36,7 +36,9 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             id,
         } => match intersect_sphere(*center, radius * radius, ray, tmin, limit) {
             Some(t) => {
-                let normal = (ray.at(t) - *center).normalize();
+                // A ray through the very centre of a tiny sphere has no direction to normalise:
+                // face it back along the ray rather than produce NaN.
+                let normal = (ray.at(t) - *center).normalize_or(-ray.dir.normalize());
                 *best = Some(Hit {
                     t,
                     normal,
@@ -169,7 +171,7 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
     let mut light = Vec3::ONE;
     let mut tmin = EPSILON;
     while let Some(hit) = closest_hit(&scene.root, ray, tmin, max_t) {
-        light *= scene.phong_at(hit.material, ray.at(hit.t)).transparent;
+        light = shade::saturate(light * scene.phong_at(hit.material, ray.at(hit.t)).transparent);
         if light == Vec3::ZERO {
             break;
         }
@@ -301,7 +303,7 @@ impl<'s> ReferenceTracer<'s> {
                     log,
                 );
         }
-        color
+        shade::saturate(color)
     }
 }
 

@@ -21,8 +21,14 @@ use crate::wavefront::render_packet;
 
 /// The largest image the renderer accepts without `--max-pixels` (64 megapixels).
 pub const DEFAULT_MAX_PIXELS: u64 = 1 << 26;
-/// The largest bounce count accepted.
-pub const MAX_BOUNCES: u32 = 1000;
+/// The largest bounce count accepted without `--max-bounces`.
+pub const DEFAULT_MAX_BOUNCES: u32 = 1000;
+/// The most worker threads a render starts.
+pub const MAX_THREADS: usize = 1024;
+/// Worker-thread stack for the recursion of one bounce (measured: between 256 B and 1 KiB).
+const STACK_PER_BOUNCE: usize = 8 << 10;
+/// Bytes a frame holds per pixel (colour, depth, normal) plus the 8-bit image made from it.
+const BYTES_PER_PIXEL: u64 = 28 + 3;
 
 /// Which tracer renders the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,6 +69,8 @@ pub struct RenderOptions {
     pub threads: usize,
     /// Refuse frames with more pixels than this.
     pub max_pixels: u64,
+    /// Refuse bounce counts above this.
+    pub max_bounces: u32,
 }
 
 impl Default for RenderOptions {
@@ -74,6 +82,7 @@ impl Default for RenderOptions {
             tracer: Tracer::Packet,
             threads: 0,
             max_pixels: DEFAULT_MAX_PIXELS,
+            max_bounces: DEFAULT_MAX_BOUNCES,
         }
     }
 }
@@ -113,6 +122,23 @@ pub struct AccelStats {
 pub type Progress<'a> = &'a (dyn Fn(u32) + Sync);
 
 impl Frame {
+    /// The first pixel `(x, y)` holding a NaN or infinite value: in its colour anywhere, in its
+    /// depth and normal where the primary ray hit (depth is `+inf` and the normal zero
+    /// elsewhere). `None` when every value is finite, as it must be.
+    pub fn non_finite_pixel(&self) -> Option<(u32, u32)> {
+        let bad = |i: usize| {
+            let hit = self.depth[i] != f32::INFINITY;
+            !self.color[i].is_finite()
+                || self.depth[i].is_nan()
+                || (hit && !self.normal[i].is_finite())
+                || (!hit && self.normal[i] != Vec3::ZERO)
+        };
+        let w = self.width.max(1) as usize;
+        (0..self.color.len())
+            .find(|&i| bad(i))
+            .map(|i| ((i % w) as u32, (i / w) as u32))
+    }
+
     /// A black frame with no hits.
     pub fn new(width: u32, height: u32) -> Frame {
         let n = width as usize * height as usize;
@@ -144,16 +170,33 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
             opts.width, opts.height, opts.max_pixels
         )));
     }
-    if opts.shade.bounces > MAX_BOUNCES {
+    if opts.shade.bounces > opts.max_bounces {
         return Err(Error::Limit(format!(
-            "bounce count {} is over the limit of {MAX_BOUNCES}",
-            opts.shade.bounces
+            "bounce count {} is over the limit of {} (raise it with --max-bounces N)",
+            opts.shade.bounces, opts.max_bounces
         )));
     }
     if !(opts.shade.weight >= 0.0 && opts.shade.weight.is_finite()) {
         return Err(Error::Usage(format!(
             "weight {}: expected a non-negative number",
             opts.shade.weight
+        )));
+    }
+    if opts.threads > MAX_THREADS {
+        return Err(Error::Limit(format!(
+            "thread count {} is over the limit of {MAX_THREADS}",
+            opts.threads
+        )));
+    }
+    // Probe for the frame's memory so a size that cannot be allocated is an error, not an abort.
+    let bytes = pixels.saturating_mul(BYTES_PER_PIXEL);
+    let fits = usize::try_from(bytes).is_ok_and(|b| Vec::<u8>::new().try_reserve_exact(b).is_ok());
+    if !fits {
+        return Err(Error::Limit(format!(
+            "image size {}x{} needs {} MiB, more memory than can be allocated",
+            opts.width,
+            opts.height,
+            (pixels as u128 * BYTES_PER_PIXEL as u128) >> 20
         )));
     }
     Ok(())
@@ -173,8 +216,15 @@ pub fn render_with_progress(
     check_options(opts)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.threads)
+        .stack_size(stack_size(opts.shade.bounces))
         .build()
-        .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
+        .map_err(|e| {
+            Error::Other(format!(
+                "cannot start worker threads ({} MiB of stack each for {} bounces): {e}",
+                stack_size(opts.shade.bounces) >> 20,
+                opts.shade.bounces
+            ))
+        })?;
     match opts.tracer {
         Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
         Tracer::Packet => {
@@ -190,6 +240,12 @@ pub fn render_with_progress(
             Ok(frame)
         }
     }
+}
+
+/// The worker-thread stack a render with `bounces` needs: the reference tracer recurses once
+/// per bounce (and the object tree, at most `MAX_NESTING` deep, once per level).
+fn stack_size(bounces: u32) -> usize {
+    (8 << 20) + bounces as usize * STACK_PER_BOUNCE
 }
 
 /// Renders with the reference tracer, rows in parallel; each row counts its rays locally and

@@ -88,6 +88,15 @@ pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Opti
     })
 }
 
+/// Clamps channels that overflowed to infinity down to `f32::MAX`. Colours are never negative
+/// (the parser checks), so sums and products of finite colours are never NaN, only possibly
+/// infinite; saturating every colour that is later multiplied (by a zero shadow factor, say)
+/// keeps `inf * 0 = NaN` out of the pixels.
+#[inline]
+pub fn saturate(c: Vec3) -> Vec3 {
+    c.min(Vec3::splat(f32::MAX))
+}
+
 /// The ambient term of a surface.
 #[inline]
 pub fn ambient(scene: &Scene, s: &Surface) -> Vec3 {
@@ -132,14 +141,14 @@ pub fn light_sample(
     opts: &ShadeOptions,
 ) -> Option<LightSample> {
     let ill = light.illuminate(s.point);
-    let color = phong(
+    let color = saturate(phong(
         &s.material,
         dir,
         s.normal,
         ill.dir,
         ill.color,
         opts.specular_fix,
-    );
+    ));
     if color == Vec3::ZERO {
         return None;
     }

@@ -85,8 +85,23 @@ pub struct BvhNode {
     pub count: u32,
 }
 
+/// Nodes store their box grown by this fraction of its size and of its coordinates' magnitude
+/// on each axis, so a ray that only grazes a primitive's bounds (a tangent ray along a face,
+/// with a zero direction component) still enters the node. A parent's padding is never smaller
+/// than its children's.
+const PAD: f32 = 1.0 / (1 << 20) as f32;
+
+fn padded(b: &Aabb) -> Aabb {
+    let pad = (b.max - b.min).max(Vec3::ZERO) * PAD + b.min.abs().max(b.max.abs()) * PAD;
+    Aabb {
+        min: b.min - pad,
+        max: b.max + pad,
+    }
+}
+
 impl BvhNode {
     fn leaf(b: &Aabb, first: u32, count: u32) -> BvhNode {
+        let b = padded(b);
         BvhNode {
             min: b.min.to_array(),
             first,
@@ -96,6 +111,7 @@ impl BvhNode {
     }
 
     fn interior(b: &Aabb, right: u32) -> BvhNode {
+        let b = padded(b);
         BvhNode {
             min: b.min.to_array(),
             first: right,

@@ -108,7 +108,9 @@ impl Geometry {
                 self.triangles.id[i],
             ),
             PrimKind::Sphere => (
-                (ray.at(t) - self.spheres.center(i)).normalize(),
+                // A ray through the very centre of a tiny sphere: face the ray (as the
+                // reference tracer does).
+                (ray.at(t) - self.spheres.center(i)).normalize_or(-ray.dir.normalize()),
                 self.spheres.material[i],
                 self.spheres.id[i],
             ),
@@ -122,7 +124,7 @@ impl Geometry {
                     inv[2] * local.x + inv[6] * local.y + inv[10] * local.z,
                 );
                 (
-                    n.normalize(),
+                    n.normalize_or(-ray.dir.normalize()),
                     self.transformed.material[i],
                     self.transformed.id[i],
                 )

@@ -38,7 +38,7 @@ impl Camera {
     /// parallel (the parser checks); `up` is made orthogonal to `direction`.
     pub fn new(kind: Projection, center: Vec3, direction: Vec3, up: Vec3) -> Camera {
         let direction = direction.normalize();
-        let horizontal = direction.cross(up).normalize();
+        let horizontal = direction.cross(up.normalize()).normalize();
         let up = horizontal.cross(direction).normalize();
         let screen = match kind {
             Projection::Orthographic { size } => size,

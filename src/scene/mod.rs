@@ -88,15 +88,14 @@ impl Light {
                 let to_light = position - p;
                 let distance = to_light.length();
                 let denom = c + l * distance + q * distance * distance;
-                let scale = if denom > 0.0 { 1.0 / denom } else { 0.0 };
-                let dir = if distance > 0.0 {
-                    to_light / distance
+                let color = if denom > 0.0 {
+                    crate::shade::saturate(color / denom)
                 } else {
                     Vec3::ZERO
                 };
                 Illumination {
-                    dir,
-                    color: color * scale,
+                    dir: to_light.normalize_or_zero(),
+                    color,
                     distance,
                 }
             }

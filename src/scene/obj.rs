@@ -13,13 +13,13 @@
 
 use std::path::Path;
 
-use super::parse::{decode_text, is_degenerate};
+use super::parse::{decode_text, is_degenerate, read_file};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 
 /// Loads the triangles of the OBJ file at `path`.
 pub fn load_obj(path: &Path) -> Result<Vec<[Vec3; 3]>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read OBJ file", e))?;
+    let bytes = read_file(path, "read OBJ file")?;
     let text = decode_text(&bytes, path)?;
     parse_obj(text, path)
 }
@@ -55,6 +55,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Vec<[Vec3; 3]>> {
                         }
                     };
                 }
+                grow(&mut vertices, path)?;
                 vertices.push(Vec3::from_array(xyz));
             }
             "f" => {
@@ -64,7 +65,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Vec<[Vec3; 3]>> {
                     let n = vertices.len() as i64;
                     let index = match index_text.parse::<i64>() {
                         Ok(i) if i >= 1 && i <= n => (i - 1) as usize,
-                        Ok(i) if i < 0 && -i <= n => (n + i) as usize,
+                        Ok(i) if i < 0 && i >= -n => (n + i) as usize,
                         _ => {
                             return Err(err(
                                 col_i,
@@ -98,6 +99,7 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Vec<[Vec3; 3]>> {
                             "expected a triangle with non-zero area, found a degenerate face (collinear or repeated vertices)".to_string(),
                         ));
                     }
+                    grow(&mut triangles, path)?;
                     triangles.push(tri);
                 }
             }
@@ -124,6 +126,20 @@ pub fn parse_obj(text: &str, path: &Path) -> Result<Vec<[Vec3; 3]>> {
         ));
     }
     Ok(triangles)
+}
+
+/// Makes room for one more item, failing cleanly when memory runs out (a huge OBJ file is an
+/// error, not an abort).
+fn grow<T>(items: &mut Vec<T>, path: &Path) -> Result<()> {
+    if items.len() == items.capacity() {
+        items.try_reserve(items.len().max(64)).map_err(|_| {
+            Error::Limit(format!(
+                "{}: cannot load: the mesh does not fit in memory",
+                path.display()
+            ))
+        })?;
+    }
+    Ok(())
 }
 
 /// Whitespace-separated words of a line with their 1-based character columns.
@@ -195,6 +211,13 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "m.obj:1:1: expected at least one face (`f` line), found none"
+        );
+        // The most negative index: no overflow when negating it.
+        let e = parse("v 0 0 0\nf 1 1 -9223372036854775808\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "m.obj:2:7: expected a vertex index between 1 and 1 (or -1 to -1), found \
+             `-9223372036854775808`"
         );
         let e = parse("v 1 2 3\nbanana 4\n").unwrap_err();
         assert!(

@@ -46,12 +46,36 @@ use crate::math::{Mat4, Vec3};
 pub const MAX_NESTING: usize = 256;
 /// The most octaves a noise texture may ask for (more would add nothing visible in f32).
 pub const MAX_OCTAVES: usize = 24;
+/// The smallest sphere radius accepted: its square must stay a normal `f32`.
+pub const MIN_RADIUS: f32 = 1e-18;
+/// The largest sphere radius accepted: its square must stay finite.
+pub const MAX_RADIUS: f32 = 1e18;
 
 /// Reads and parses a scene file.
 pub fn parse_file(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, "read scene", e))?;
+    let bytes = read_file(path, "read scene")?;
     let text = decode_text(&bytes, path)?;
     parse_str(text, path)
+}
+
+/// Reads a whole input file. Only regular files are read (a device such as `/dev/zero` would
+/// never end), and a file too large for memory is an error, not an abort.
+pub(crate) fn read_file(path: &Path, action: &'static str) -> Result<Vec<u8>> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, action, e))?;
+    if !meta.is_file() {
+        let kind = if meta.is_dir() {
+            "a folder"
+        } else {
+            "not a regular file"
+        };
+        return Err(Error::io(
+            path,
+            action,
+            std::io::Error::other(format!("it is {kind}")),
+        ));
+    }
+    // std::fs::read reserves the file's size with try_reserve: no abort on a huge file.
+    std::fs::read(path).map_err(|e| Error::io(path, action, e))
 }
 
 /// Checks that `bytes` are UTF-8 text, naming the first offending byte's position otherwise.
@@ -78,8 +102,10 @@ pub(crate) fn decode_text<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str> {
 
 /// Parses scene text. `path` names the text in errors and anchors relative OBJ paths.
 pub fn parse_str(text: &str, path: &Path) -> Result<Scene> {
-    let mut p = Parser::new(text, path);
-    p.scene()
+    match tokenize(text) {
+        Some((tokens, eof)) => Parser::new(tokens, eof, path).scene(),
+        None => Err(Parser::new(Vec::new(), (1, 1), path).out_of_memory()),
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -89,35 +115,47 @@ struct Token<'a> {
     col: usize,
 }
 
-fn tokenize<'a>(text: &'a str) -> (Vec<Token<'a>>, (usize, usize)) {
+/// Splits `text` into tokens; also returns the position just past the end. `None` when the
+/// token list does not fit in memory (a huge file fails cleanly instead of aborting).
+fn tokenize<'a>(text: &'a str) -> Option<(Vec<Token<'a>>, (usize, usize))> {
+    fn push<'a>(tokens: &mut Vec<Token<'a>>, token: Token<'a>) -> Option<()> {
+        if tokens.len() == tokens.capacity() {
+            tokens.try_reserve(tokens.len().max(256)).ok()?;
+        }
+        tokens.push(token);
+        Some(())
+    }
     let mut tokens = Vec::new();
     let (mut line, mut col) = (1, 1);
     let mut start: Option<(usize, usize, usize)> = None; // byte offset, line, col
     let mut in_comment = false;
-    let flush =
-        |tokens: &mut Vec<Token<'a>>, start: &mut Option<(usize, usize, usize)>, end: usize| {
-            if let Some((s, l, c)) = start.take() {
-                tokens.push(Token {
+    let flush = |tokens: &mut Vec<Token<'a>>,
+                 start: &mut Option<(usize, usize, usize)>,
+                 end: usize|
+     -> Option<()> {
+        match start.take() {
+            Some((s, line, col)) => push(
+                tokens,
+                Token {
                     text: &text[s..end],
-                    line: l,
-                    col: c,
-                });
-            }
-        };
+                    line,
+                    col,
+                },
+            ),
+            None => Some(()),
+        }
+    };
     for (i, ch) in text.char_indices() {
         if in_comment {
             if ch == '\n' {
                 in_comment = false;
             }
         } else if ch.is_whitespace() {
-            flush(&mut tokens, &mut start, i);
+            flush(&mut tokens, &mut start, i)?;
         } else if ch == '{' || ch == '}' {
-            flush(&mut tokens, &mut start, i);
-            tokens.push(Token {
-                text: &text[i..i + 1],
-                line,
-                col,
-            });
+            flush(&mut tokens, &mut start, i)?;
+            let text = &text[i..i + 1];
+            push(&mut tokens, Token { text, line, col })?;
         } else if ch == '#' && start.is_none() {
             in_comment = true;
         } else if start.is_none() {
@@ -130,8 +168,8 @@ fn tokenize<'a>(text: &'a str) -> (Vec<Token<'a>>, (usize, usize)) {
             col += 1;
         }
     }
-    flush(&mut tokens, &mut start, text.len());
-    (tokens, (line, col))
+    flush(&mut tokens, &mut start, text.len())?;
+    Some((tokens, (line, col)))
 }
 
 /// How a token is shown in "found ..." messages: quoted, escaped, and cut short if long.
@@ -163,15 +201,14 @@ struct Parser<'a> {
     eof: (usize, usize),
     current_material: u32,
     /// Every material index used, with the token that named it, checked once all are known.
-    material_refs: Vec<(u32, Token<'a>)>,
+    material_refs: Vec<(usize, Token<'a>)>,
     depth: usize,
     /// The id of the next primitive (see [`Object`]).
     next_id: u32,
 }
 
 impl<'a> Parser<'a> {
-    fn new(text: &'a str, path: &'a Path) -> Parser<'a> {
-        let (tokens, eof) = tokenize(text);
+    fn new(tokens: Vec<Token<'a>>, eof: (usize, usize), path: &'a Path) -> Parser<'a> {
         Parser {
             path,
             tokens,
@@ -193,6 +230,13 @@ impl<'a> Parser<'a> {
         Error::parse(self.path, line, col, msg)
     }
 
+    fn out_of_memory(&self) -> Error {
+        Error::Limit(format!(
+            "{}: cannot parse: the scene does not fit in memory",
+            self.path.display()
+        ))
+    }
+
     /// "expected {what}, found {the token at the cursor}".
     fn expected(&self, what: &str) -> Error {
         let tok = self.peek();
@@ -200,6 +244,26 @@ impl<'a> Parser<'a> {
             tok.as_ref(),
             format!("expected {what}, found {}", describe(tok.as_ref())),
         )
+    }
+
+    /// A count promised more items than the block holds: "expected 3 objects (numObjects 3),
+    /// found `}` after 2".
+    fn too_few(&self, noun: &str, field: &str, n: usize, got: usize) -> Error {
+        let tok = self.peek();
+        self.error_at(
+            tok.as_ref(),
+            format!(
+                "expected {} ({field} {n}), found {} after {got}",
+                plural(n, noun),
+                describe(tok.as_ref())
+            ),
+        )
+    }
+
+    /// A block holds more items than its count: "expected `}` after 1 object (numObjects 1),
+    /// found `Sphere`".
+    fn too_many(&self, noun: &str, field: &str, n: usize) -> Error {
+        self.expected(&format!("`}}` after {} ({field} {n})", plural(n, noun)))
     }
 
     fn next(&mut self, what: &str) -> Result<Token<'a>> {
@@ -252,15 +316,34 @@ impl<'a> Parser<'a> {
     fn direction(&mut self, what: &str) -> Result<Vec3> {
         let at = self.peek();
         let v = self.vec3(what)?;
-        let len = v.length();
-        if len > 0.0 && len.is_finite() {
+        if v.try_normalize().is_some() {
             Ok(v)
+        } else {
+            let kind = if v.length().is_finite() {
+                "non-zero"
+            } else {
+                "finite-length"
+            };
+            Err(self.error_at(
+                at.as_ref(),
+                format!("expected a {kind} vector for {what}, found {}", vec_text(v)),
+            ))
+        }
+    }
+
+    /// A colour: three non-negative numbers (a negative channel is meaningless, and would let
+    /// an overflow to infinity turn into NaN).
+    fn color(&mut self, what: &str) -> Result<Vec3> {
+        let at = self.peek();
+        let c = self.vec3(what)?;
+        if c.min_element() >= 0.0 {
+            Ok(c)
         } else {
             Err(self.error_at(
                 at.as_ref(),
                 format!(
-                    "expected a non-zero vector for {what}, found ({} {} {})",
-                    v.x, v.y, v.z
+                    "expected a colour with no negative channel for {what}, found {}",
+                    vec_text(c)
                 ),
             ))
         }
@@ -274,7 +357,10 @@ impl<'a> Parser<'a> {
         } else {
             Err(self.error_at(
                 at.as_ref(),
-                format!("expected a positive number for {what}, found {v}"),
+                format!(
+                    "expected a positive number for {what}, found {}",
+                    num_text(v)
+                ),
             ))
         }
     }
@@ -286,6 +372,9 @@ impl<'a> Parser<'a> {
                 self.pos += 1;
                 Ok(n as usize)
             }
+            Some(Err(e)) if *e.kind() == std::num::IntErrorKind::PosOverflow => Err(self.expected(
+                &format!("a whole number for {what} of at most {}", u32::MAX),
+            )),
             _ => Err(self.expected(&format!("a whole number for {what}"))),
         }
     }
@@ -357,22 +446,23 @@ impl<'a> Parser<'a> {
         };
         let mut materials = materials.unwrap_or_default();
         for (index, tok) in &self.material_refs {
-            if *index as usize >= materials.len() {
-                return Err(self.error_at(
-                    Some(tok),
-                    format!(
-                        "expected a material index below {} (numMaterials {}), found {index}",
-                        materials.len(),
-                        materials.len()
+            if *index >= materials.len() {
+                let msg = match materials.len() {
+                    0 => {
+                        format!("expected a Materials block to define material {index}, found none")
+                    }
+                    n => format!(
+                        "expected a material index below {n} (numMaterials {n}), found {index}"
                     ),
-                ));
+                };
+                return Err(self.error_at(Some(tok), msg));
             }
         }
         if let Some(start) = texture_cycle(&materials) {
             let tok = self
                 .material_refs
                 .iter()
-                .find(|(i, _)| *i as usize == start)
+                .find(|(i, _)| *i == start)
                 .map(|(_, t)| *t);
             return Err(self.error_at(
                 tok.as_ref(),
@@ -469,7 +559,10 @@ impl<'a> Parser<'a> {
                         if !(a > 0.0 && a < 180.0) {
                             return Err(p.error_at(
                                 at.as_ref(),
-                                format!("expected an angle between 0 and 180 degrees, found {a}"),
+                                format!(
+                                    "expected an angle between 0 and 180 degrees, found {}",
+                                    num_text(a)
+                                ),
                             ));
                         }
                         value = a.to_radians();
@@ -485,7 +578,10 @@ impl<'a> Parser<'a> {
         if cross.length() < 1e-6 {
             return Err(self.error_at(
                 dir_tok.as_ref(),
-                format!("expected `up` not parallel to `direction` in {block}, found both along ({} {} {})", direction.x, direction.y, direction.z),
+                format!(
+                    "expected `up` not parallel to `direction` in {block}, found both along {}",
+                    vec_text(direction)
+                ),
             ));
         }
         let projection = if ortho {
@@ -503,22 +599,16 @@ impl<'a> Parser<'a> {
         let n = self.count("numLights")?;
         let mut lights = Vec::new();
         for i in 0..n {
-            let Some(tok) = self.peek() else {
-                return Err(self.expected("a light"));
-            };
-            let light = match tok.text {
-                "DirectionalLight" => self.directional_light()?,
-                "PointLight" => self.point_light()?,
-                _ => {
-                    return Err(self.expected(&format!(
-                        "a light (DirectionalLight or PointLight) for numLights {n}, after {i}"
-                    )));
-                }
+            let light = match self.peek().map(|t| t.text) {
+                Some("DirectionalLight") => self.directional_light()?,
+                Some("PointLight") => self.point_light()?,
+                None | Some("}") => return Err(self.too_few("light", "numLights", n, i)),
+                _ => return Err(self.expected("a light (DirectionalLight or PointLight)")),
             };
             lights.push(light);
         }
         if self.peek().is_some_and(|t| t.text != "}") {
-            return Err(self.expected(&format!("`}}` after {n} lights (numLights {n})")));
+            return Err(self.too_many("light", "numLights", n));
         }
         self.keyword("}")?;
         Ok(lights)
@@ -534,7 +624,7 @@ impl<'a> Parser<'a> {
                 if name == "direction" {
                     direction = p.direction("direction")?.normalize();
                 } else {
-                    color = p.vec3("color")?;
+                    color = p.color("color")?;
                 }
                 Ok(())
             },
@@ -553,14 +643,18 @@ impl<'a> Parser<'a> {
             &mut |p, name| {
                 match name {
                     "position" => position = p.vec3("position")?,
-                    "color" => color = p.vec3("color")?,
+                    "color" => color = p.color("color")?,
                     _ => {
                         let at = p.peek();
                         let a = p.vec3("attenuation")?;
                         if a.min_element() < 0.0 || a.max_element() <= 0.0 {
                             return Err(p.error_at(
                                 at.as_ref(),
-                                format!("expected non-negative attenuation constants, not all zero, found ({} {} {})", a.x, a.y, a.z),
+                                format!(
+                                    "expected non-negative attenuation constants, not all zero, \
+                                     found {}",
+                                    vec_text(a)
+                                ),
                             ));
                         }
                         attenuation = a.to_array();
@@ -584,9 +678,9 @@ impl<'a> Parser<'a> {
         let (seen, close) =
             self.block_fields("Background", &["color", "ambientLight"], &mut |p, name| {
                 if name == "color" {
-                    color = p.vec3("color")?;
+                    color = p.color("color")?;
                 } else {
-                    ambient = Some(p.vec3("ambientLight")?);
+                    ambient = Some(p.color("ambientLight")?);
                 }
                 Ok(())
             })?;
@@ -601,23 +695,21 @@ impl<'a> Parser<'a> {
         let n = self.count("numMaterials")?;
         let mut materials = Vec::new();
         for i in 0..n {
-            let Some(tok) = self.peek() else {
-                return Err(self.expected("a material"));
-            };
-            let m = match tok.text {
-                "Material" | "PhongMaterial" => Material::Phong(self.phong()?),
-                "Checkerboard" | "Noise" | "Marble" | "Wood" => self.texture()?,
+            let m = match self.peek().map(|t| t.text) {
+                Some("Material" | "PhongMaterial") => Material::Phong(self.phong()?),
+                Some("Checkerboard" | "Noise" | "Marble" | "Wood") => self.texture()?,
+                None | Some("}") => return Err(self.too_few("material", "numMaterials", n, i)),
                 _ => {
-                    return Err(self.expected(&format!(
+                    return Err(self.expected(
                         "a material (Material, PhongMaterial, Checkerboard, Noise, Marble or \
-                         Wood) for numMaterials {n}, after {i}"
-                    )));
+                         Wood)",
+                    ));
                 }
             };
             materials.push(m);
         }
         if self.peek().is_some_and(|t| t.text != "}") {
-            return Err(self.expected(&format!("`}}` after {n} materials (numMaterials {n})")));
+            return Err(self.too_many("material", "numMaterials", n));
         }
         self.keyword("}")?;
         Ok(materials)
@@ -638,17 +730,20 @@ impl<'a> Parser<'a> {
             ],
             &mut |p, name| {
                 match name {
-                    "diffuseColor" => m.diffuse = p.vec3(name)?,
-                    "specularColor" => m.specular = p.vec3(name)?,
-                    "reflectiveColor" => m.reflective = p.vec3(name)?,
-                    "transparentColor" => m.transparent = p.vec3(name)?,
+                    "diffuseColor" => m.diffuse = p.color(name)?,
+                    "specularColor" => m.specular = p.color(name)?,
+                    "reflectiveColor" => m.reflective = p.color(name)?,
+                    "transparentColor" => m.transparent = p.color(name)?,
                     "exponent" => {
                         let at = p.peek();
                         m.exponent = p.number(name)?;
                         if m.exponent < 0.0 {
                             return Err(p.error_at(
                                 at.as_ref(),
-                                format!("expected a non-negative exponent, found {}", m.exponent),
+                                format!(
+                                    "expected a non-negative exponent, found {}",
+                                    num_text(m.exponent)
+                                ),
                             ));
                         }
                     }
@@ -676,7 +771,9 @@ impl<'a> Parser<'a> {
             let at = self.peek();
             let i = self.count("materialIndex")?;
             *m = i.min(NO_MATERIAL as usize - 1) as u32;
-            self.material_refs.push((*m, at.unwrap()));
+            if let Some(at) = at {
+                self.material_refs.push((i, at));
+            }
         }
         let mut octaves = || -> Result<u32> {
             self.keyword("octaves")?;
@@ -754,16 +851,14 @@ impl<'a> Parser<'a> {
             if children.len() == n {
                 break;
             }
-            if self.peek().is_some_and(|t| t.text == "}") || self.peek().is_none() {
-                return Err(self.expected(&format!(
-                    "{OBJECTS} for numObjects {n}, after {}",
-                    children.len()
-                )));
+            if self.peek().is_none_or(|t| t.text == "}") {
+                return Err(self.too_few("object", "numObjects", n, children.len()));
             }
+            grow(&mut children).map_err(|()| self.out_of_memory())?;
             children.push(self.object()?);
         }
         if self.peek().is_some_and(|t| t.text != "}") {
-            return Err(self.expected(&format!("`}}` after {n} objects (numObjects {n})")));
+            return Err(self.too_many("object", "numObjects", n));
         }
         self.keyword("}")?;
         self.depth -= 1;
@@ -776,9 +871,11 @@ impl<'a> Parser<'a> {
             self.pos += 1;
             let at = self.peek();
             let i = self.count("MaterialIndex")?;
-            let i = i.min(NO_MATERIAL as usize - 1) as u32;
-            self.material_refs.push((i, at.unwrap()));
-            self.current_material = i;
+            if let Some(at) = at {
+                self.material_refs.push((i, at));
+            }
+            // Out-of-range indices are reported once every material is known.
+            self.current_material = i.min(NO_MATERIAL as usize - 1) as u32;
         }
         Ok(())
     }
@@ -797,7 +894,18 @@ impl<'a> Parser<'a> {
                         if name == "center" {
                             center = p.vec3("center")?;
                         } else {
+                            let at = p.peek();
                             radius = p.positive("radius")?;
+                            if !(MIN_RADIUS..=MAX_RADIUS).contains(&radius) {
+                                return Err(p.error_at(
+                                    at.as_ref(),
+                                    format!(
+                                        "expected a radius between {MIN_RADIUS:e} and \
+                                         {MAX_RADIUS:e}, found {}",
+                                        num_text(radius)
+                                    ),
+                                ));
+                            }
                         }
                         Ok(())
                     })?;
@@ -850,7 +958,7 @@ impl<'a> Parser<'a> {
                 if is_degenerate(&v) {
                     return Err(self.error_at(
                         Some(&tok),
-                        "expected a triangle with non-zero area, found a degenerate one (its vertices are collinear)".to_string(),
+                        "expected a triangle with non-zero area, found a degenerate one (its vertices are collinear or coincide)".to_string(),
                     ));
                 }
                 Ok(Object::Triangle {
@@ -890,6 +998,12 @@ impl<'a> Parser<'a> {
                     matrix *= self.xform()?;
                 }
                 self.material_index()?;
+                if !self.peek().is_some_and(|t| is_object(t.text)) {
+                    return Err(self.expected(&format!(
+                        "a transform (Translate, Scale, UniformScale, XRotate, YRotate, ZRotate, \
+                         Rotate or Matrix) or {OBJECTS}"
+                    )));
+                }
                 let child = self.object()?;
                 self.material_index()?;
                 self.keyword("}")?;
@@ -899,8 +1013,10 @@ impl<'a> Parser<'a> {
                 if !(det.abs() > 1e-12 && det.is_finite() && inverse.is_finite()) {
                     return Err(self.error_at(
                         Some(&tok),
-                        "expected an invertible transform, found a singular one (a zero scale?)"
-                            .to_string(),
+                        format!(
+                            "expected an invertible transform, found one with determinant {}",
+                            num_text(det)
+                        ),
                     ));
                 }
                 Ok(Object::Transform(Box::new(Transformed::new(matrix, child))))
@@ -931,10 +1047,7 @@ impl<'a> Parser<'a> {
                 if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
                     return Err(self.error_at(
                         at.as_ref(),
-                        format!(
-                            "expected non-zero scale factors, found ({} {} {})",
-                            s.x, s.y, s.z
-                        ),
+                        format!("expected non-zero scale factors, found {}", vec_text(s)),
                     ));
                 }
                 Mat4::from_scale(s)
@@ -997,6 +1110,44 @@ impl<'a> Parser<'a> {
     }
 }
 
+/// "1 object", "2 objects".
+fn plural(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}
+
+/// A number as messages show it: plain, or in exponent form when very large or small.
+fn num_text(x: f32) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e7).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// A vector as messages show it: `(x y z)`.
+fn vec_text(v: Vec3) -> String {
+    format!("({} {} {})", num_text(v.x), num_text(v.y), num_text(v.z))
+}
+
+/// Makes room for one more item; `Err` when memory runs out.
+fn grow<T>(items: &mut Vec<T>) -> std::result::Result<(), ()> {
+    if items.len() == items.capacity() {
+        items.try_reserve(items.len().max(4)).map_err(|_| ())?;
+    }
+    Ok(())
+}
+
+fn is_object(word: &str) -> bool {
+    matches!(
+        word,
+        "Sphere" | "Plane" | "Triangle" | "TriangleMesh" | "Group" | "Transform"
+    )
+}
+
 fn is_xform(word: &str) -> bool {
     matches!(
         word,
@@ -1015,8 +1166,9 @@ fn is_xform(word: &str) -> bool {
 pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let e1 = v[1] - v[0];
     let e2 = v[2] - v[0];
-    let area2 = e1.cross(e2).length();
-    !(area2 > 1e-7 * e1.length() * e2.length() && area2.is_finite())
+    let cross = e1.cross(e2);
+    let area2 = cross.length();
+    !(area2 > 1e-7 * e1.length() * e2.length() && cross.try_normalize().is_some())
 }
 
 fn uses_material(obj: &Object, index: u32) -> bool {

@@ -116,6 +116,11 @@ pub fn render_packet(
                 tree: None,
             };
             render_band(&ctx, band, &mut out, arenas);
+            // Sums of overflowing colours stay at the largest finite value, as in the
+            // reference tracer.
+            for c in out.color.iter_mut() {
+                *c = crate::shade::saturate(*c);
+            }
             progress(band.rows);
             (out.rays, out.bounce_time)
         })

@@ -114,7 +114,7 @@ pub fn shade_hits(
                     &sample.shadow,
                     sample.max_t,
                     pixel,
-                    throughput * sample.color,
+                    shade::saturate(throughput * sample.color),
                     index as u32,
                     node,
                 );
@@ -124,12 +124,12 @@ pub fn shade_hits(
         }
         let [mirror, refracted] = shade::scatter(&s, ray.dir, hit.normal, weight, bounce, ctx.opts);
         if let Some(m) = mirror {
-            q.next
-                .push_reflected(&m.ray, pixel, throughput * m.color, m.weight, node);
+            let t = shade::saturate(throughput * m.color);
+            q.next.push_reflected(&m.ray, pixel, t, m.weight, node);
         }
         if let Some(r) = refracted {
-            q.next
-                .push_transmitted(&r.ray, pixel, throughput * r.color, r.weight, node);
+            let t = shade::saturate(throughput * r.color);
+            q.next.push_transmitted(&r.ray, pixel, t, r.weight, node);
         }
     }
 }
@@ -161,7 +161,8 @@ pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut
                         .geometry
                         .surface(prims[lane] as u32, &ray, ts[lane])
                         .material;
-                    light[lane] *= ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
+                    let transparent = ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
+                    light[lane] = shade::saturate(light[lane] * transparent);
                     tmin[lane] = ts[lane];
                     if light[lane] == Vec3::ZERO {
                         active &= !(1 << lane);

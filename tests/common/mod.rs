@@ -144,19 +144,6 @@ pub fn render_both(
     (reference, packet)
 }
 
-/// Asserts that every colour, depth (where hit) and normal of a frame is finite.
-pub fn assert_finite(frame: &whitted::Frame, what: &str) {
-    for (i, c) in frame.color.iter().enumerate() {
-        assert!(c.is_finite(), "{what}: pixel {i} colour {c} is not finite");
-    }
-    for (i, n) in frame.normal.iter().enumerate() {
-        assert!(n.is_finite(), "{what}: pixel {i} normal {n} is not finite");
-    }
-    for (i, t) in frame.depth.iter().enumerate() {
-        assert!(!t.is_nan(), "{what}: pixel {i} depth is NaN");
-    }
-}
-
 /// The equivalence criterion between the two tracers: at most 0.1% of pixels differ by more
 /// than 2/255 in any channel. Returns the difference for reporting.
 pub fn assert_equivalent(a: &Rgb8, b: &Rgb8, what: &str) -> Diff {
@@ -212,4 +199,87 @@ impl Rng {
     pub fn chance(&mut self, p: f32) -> bool {
         self.f32() < p
     }
+}
+
+/// What one run of the `whitted` binary did.
+pub struct Run {
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+/// Runs the `whitted` binary with `args` in `dir`.
+pub fn whitted(dir: &Path, args: &[&str]) -> Run {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_whitted"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+impl Run {
+    /// Asserts the run failed with exit code 2 and one line `error: {start}...` on stderr, and
+    /// returns that line without `error: `.
+    pub fn assert_error(&self, start: &str) -> String {
+        assert_eq!(self.code, Some(2), "expected exit code 2:\n{}", self.stderr);
+        assert!(
+            !self.stderr.contains("panicked"),
+            "panicked:\n{}",
+            self.stderr
+        );
+        assert_eq!(
+            self.stderr.lines().count(),
+            1,
+            "expected one line on stderr:\n{}",
+            self.stderr
+        );
+        let msg = self.stderr.trim_end().strip_prefix("error: ").unwrap_or("");
+        assert!(
+            msg.starts_with(start),
+            "expected `error: {start}...`, found:\n{}",
+            self.stderr
+        );
+        msg.to_string()
+    }
+}
+
+/// The sorted names of the entries of `dir`.
+pub fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// Asserts that no pixel of `frame` holds a NaN or infinite value (colour anywhere; depth and
+/// normal where the primary ray hit).
+pub fn assert_finite(frame: &whitted::Frame, what: &str) {
+    if let Some((x, y)) = frame.non_finite_pixel() {
+        let i = (y * frame.width + x) as usize;
+        panic!(
+            "{what}: pixel ({x}, {y}) is not finite: colour {} depth {} normal {}",
+            frame.color[i], frame.depth[i], frame.normal[i]
+        );
+    }
+}
+
+/// Copies `scenes/NAME` (and every mesh beside it) into `dir`, returning the scene's path.
+pub fn copy_scene(name: &str, dir: &Path) -> PathBuf {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for entry in std::fs::read_dir(&scenes).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "obj") {
+            std::fs::copy(&path, dir.join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    let to = dir.join(name);
+    std::fs::copy(scenes.join(name), &to).unwrap();
+    to
 }

@@ -1,0 +1,205 @@
+//! Claim: an absurd request is refused before anything is allocated, with the limit named and
+//! the option that lifts it; lifting it works; and a scene or image that cannot fit in memory
+//! fails cleanly (exit 2, one line) instead of aborting.
+//!
+//! What belongs here: image size, bounce count, thread count and memory limits, through the
+//! real binary. Malformed files belong in `bad_input.rs`.
+
+mod common;
+
+use common::{copy_scene, listing, scratch_dir, whitted};
+
+/// True when the kernel grants any allocation (`vm.overcommit_memory = 1`): then a request
+/// for more memory than exists succeeds until it is touched, and cannot be tested for.
+fn overcommit_always() -> bool {
+    std::fs::read_to_string("/proc/sys/vm/overcommit_memory").is_ok_and(|s| s.trim() == "1")
+}
+
+#[test]
+fn absurd_image_size_is_refused_naming_the_limit_and_the_option() {
+    let dir = scratch_dir("limits/size");
+    // The scene does not even exist: the size is refused before anything is read.
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "absent.txt",
+            "-o",
+            "out.png",
+            "--size",
+            "200000",
+            "200000",
+        ],
+    );
+    assert_eq!(
+        run.assert_error("image size"),
+        "image size 200000x200000 is 40000000000 pixels, over the limit of 67108864 (raise it \
+         with --max-pixels N)"
+    );
+    // The course spelling too.
+    let run = whitted(
+        &dir,
+        &[
+            "-input",
+            "absent.txt",
+            "-size",
+            "200000",
+            "200000",
+            "-output",
+            "o.tga",
+        ],
+    );
+    run.assert_error("image size 200000x200000 is 40000000000 pixels");
+    let run = whitted(
+        &dir,
+        &["render", "absent.txt", "-o", "out.png", "--size", "0", "5"],
+    );
+    run.assert_error("image size 0x5: expected a width and height of at least 1");
+    assert!(listing(&dir).is_empty());
+}
+
+#[test]
+fn an_image_too_large_for_memory_is_an_error_not_an_abort() {
+    let dir = scratch_dir("limits/memory");
+    // 1.6e19 pixels: more than any address space, with the pixel limit lifted as far as it goes.
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "absent.txt",
+            "-o",
+            "out.png",
+            "--size",
+            "4000000000",
+            "4000000000",
+            "--max-pixels",
+            "18446744073709551615",
+        ],
+    );
+    run.assert_error(
+        "image size 4000000000x4000000000 needs 473022460937500 MiB, more memory than",
+    );
+    if overcommit_always() {
+        eprintln!("skipped the 100000x100000 case: vm.overcommit_memory = 1 grants any request");
+    } else {
+        let run = whitted(
+            &dir,
+            &[
+                "render",
+                "absent.txt",
+                "-o",
+                "out.png",
+                "--size",
+                "100000",
+                "100000",
+                "--max-pixels",
+                "10000000000",
+            ],
+        );
+        run.assert_error("image size 100000x100000 needs 295639 MiB, more memory than");
+    }
+    assert!(listing(&dir).is_empty());
+}
+
+#[test]
+fn absurd_bounce_count_is_refused_naming_the_limit_and_the_option() {
+    let dir = scratch_dir("limits/bounces");
+    let run = whitted(
+        &dir,
+        &["render", "absent.txt", "-o", "out.png", "--bounces", "5000"],
+    );
+    assert_eq!(
+        run.assert_error("bounce count"),
+        "bounce count 5000 is over the limit of 1000 (raise it with --max-bounces N)"
+    );
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "absent.txt",
+            "-o",
+            "o.png",
+            "--bounces",
+            "99999999999",
+        ],
+    );
+    run.assert_error("option --bounces: expected a bounce count, found `99999999999`");
+    assert!(listing(&dir).is_empty());
+}
+
+#[test]
+fn lifting_the_bounce_limit_works_without_overflowing_the_stack() {
+    // Two facing mirrors and no weight cutoff: every pixel that sees a mirror recurses the full
+    // 20000 bounces, far deeper than a default 2 MiB thread stack allows.
+    let dir = scratch_dir("limits/deep");
+    copy_scene("facing_mirrors.txt", &dir);
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "facing_mirrors.txt",
+            "-o",
+            "out.png",
+            "--size",
+            "2",
+            "2",
+            "--weight",
+            "0",
+            "--bounces",
+            "20000",
+            "--max-bounces",
+            "20000",
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert!(dir.join("out.png").is_file());
+}
+
+#[test]
+fn absurd_thread_count_is_refused() {
+    let dir = scratch_dir("limits/threads");
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "absent.txt",
+            "-o",
+            "out.png",
+            "--threads",
+            "100000",
+        ],
+    );
+    assert_eq!(
+        run.assert_error("thread count"),
+        "thread count 100000 is over the limit of 1024"
+    );
+}
+
+#[test]
+fn a_scene_too_large_for_memory_is_an_error_not_an_abort() {
+    if overcommit_always() {
+        eprintln!("skipped: vm.overcommit_memory = 1 grants any request");
+        return;
+    }
+    // A sparse file of 4 TiB takes no disk space; reading it must fail cleanly.
+    let dir = scratch_dir("limits/huge_scene");
+    let file = std::fs::File::create(dir.join("huge.txt")).unwrap();
+    file.set_len(1 << 42).unwrap();
+    drop(file);
+    let run = whitted(&dir, &["render", "huge.txt", "-o", "out.png"]);
+    run.assert_error("huge.txt: cannot read scene: out of memory");
+    assert_eq!(listing(&dir), ["huge.txt"]);
+}
+
+#[test]
+fn a_negative_weight_is_refused() {
+    let dir = scratch_dir("limits/weight");
+    let run = whitted(
+        &dir,
+        &["render", "absent.txt", "-o", "out.png", "--weight", "-1"],
+    );
+    assert_eq!(
+        run.assert_error("weight"),
+        "weight -1: expected a non-negative number (see `whitted --help`)"
+    );
+}
