@@ -16,7 +16,7 @@ use crate::simd::trunc3;
 
 /// The most primitives a leaf holds.
 pub const MAX_LEAF: usize = 4;
-/// Bins per axis (a power of two).
+/// Bins per axis for big nodes (a power of two).
 pub const BINS: usize = 16;
 /// Cost of visiting a node relative to intersecting one primitive.
 const TRAVERSAL_COST: f32 = 1.0;
@@ -110,6 +110,7 @@ pub fn build(bounds: &[Aabb], tags: &[u8]) -> (Bvh, Vec<u32>) {
         .collect();
     let mut b = Builder {
         nodes: Vec::with_capacity(n.max(1)),
+        bins: Bins::new(),
     };
     if n > 0 {
         b.node(&mut refs, 0, all, centroids, 0, true);
@@ -120,6 +121,7 @@ pub fn build(bounds: &[Aabb], tags: &[u8]) -> (Bvh, Vec<u32>) {
 
 struct Builder {
     nodes: Vec<BvhNode>,
+    bins: Bins,
 }
 
 /// The chosen split: axis, bin boundary, the two children's bounds, the left count and the
@@ -158,7 +160,7 @@ impl Builder {
         let split = if depth >= MAX_DEPTH - 1 {
             None
         } else {
-            best_split(refs, &centroids)
+            best_split(refs, &centroids, &mut self.bins)
         };
         let (mid, left, right) = match split {
             Some(s) => {
@@ -206,71 +208,84 @@ fn bounds_of(refs: &[PrimRef]) -> (Box4, Box4) {
     (b, c)
 }
 
-/// Per-axis bin scale: bins span the centroid bounds (zero-extent axes get scale 0).
+/// Bins for a node of `count` primitives: [`BINS`] for big nodes, fewer for small ones, whose
+/// cost would otherwise be setting up and sweeping empty bins (see PERF.md, "BVH build").
 #[inline(always)]
-fn bin_scale(centroids: &Box4) -> Vec4 {
+fn bins_for(count: usize) -> usize {
+    count.next_power_of_two().clamp(2, BINS)
+}
+
+/// Per-axis bin scale: `nb` bins span the centroid bounds (zero-extent axes get scale 0).
+#[inline(always)]
+fn bin_scale(centroids: &Box4, nb: usize) -> Vec4 {
     let extent = centroids.max - centroids.min;
-    let s = Vec4::splat(BINS as f32 * (1.0 - 1e-6)) / extent;
+    let s = Vec4::splat(nb as f32 * (1.0 - 1e-6)) / extent;
     Vec4::select(extent.cmpgt(Vec4::ZERO), s, Vec4::ZERO)
 }
 
 /// The bin of a (doubled) centroid on each axis.
 #[inline(always)]
-fn bin_index(c: Vec4, lo: Vec4, scale: Vec4) -> [usize; 3] {
-    let b = ((c - lo) * scale).clamp(Vec4::ZERO, Vec4::splat((BINS - 1) as f32));
+fn bin_index(c: Vec4, lo: Vec4, scale: Vec4, nb: usize) -> [usize; 3] {
+    let b = ((c - lo) * scale).clamp(Vec4::ZERO, Vec4::splat((nb - 1) as f32));
     trunc3(b)
 }
 
+/// Bin counts and bounds per axis, kept by the builder so no node pays for setting up more
+/// than the bins it uses.
+struct Bins {
+    counts: [[u32; BINS]; 3],
+    boxes: [[Box4; BINS]; 3],
+}
+
+impl Bins {
+    fn new() -> Bins {
+        Bins {
+            counts: [[0; BINS]; 3],
+            boxes: [[Box4::EMPTY; BINS]; 3],
+        }
+    }
+}
+
 /// Bins every reference on all three axes in one pass and returns the cheapest split by SAH.
-fn best_split(refs: &[PrimRef], centroids: &Box4) -> Option<Split> {
-    let scale = bin_scale(centroids);
+fn best_split(refs: &[PrimRef], centroids: &Box4, bins: &mut Bins) -> Option<Split> {
+    let nb = bins_for(refs.len());
+    let scale = bin_scale(centroids, nb);
     let lo = centroids.min;
-    // Two sets of bins, filled alternately: consecutive primitives often fall in the same bin,
-    // and one set would chain every update through memory to the previous one.
-    let mut counts = [[[0u32; BINS]; 3]; 2];
-    let mut boxes = [[[Box4::EMPTY; BINS]; 3]; 2];
-    let mut add = |set: usize, r: &PrimRef| {
-        let bins = bin_index(r.centroid2(), lo, scale);
+    for axis in 0..3 {
+        bins.counts[axis][..nb].fill(0);
+        bins.boxes[axis][..nb].fill(Box4::EMPTY);
+    }
+    for r in refs {
+        let b3 = bin_index(r.centroid2(), lo, scale, nb);
         for axis in 0..3 {
             // (the mask only tells the compiler the index is in range)
-            let b = bins[axis] & (BINS - 1);
-            counts[set][axis][b] += 1;
-            boxes[set][axis][b].grow(r.min, r.max);
+            let b = b3[axis] & (BINS - 1);
+            bins.counts[axis][b] += 1;
+            bins.boxes[axis][b].grow(r.min, r.max);
         }
-    };
-    let mut pairs = refs.chunks_exact(2);
-    for pair in &mut pairs {
-        add(0, &pair[0]);
-        add(1, &pair[1]);
     }
-    for r in pairs.remainder() {
-        add(0, r);
-    }
-    let counts: [[u32; BINS]; 3] =
-        std::array::from_fn(|a| std::array::from_fn(|b| counts[0][a][b] + counts[1][a][b]));
-    let boxes: [[Box4; BINS]; 3] =
-        std::array::from_fn(|a| std::array::from_fn(|b| boxes[0][a][b].union(&boxes[1][a][b])));
     let mut best: Option<Split> = None;
+    let mut right_box = [Box4::EMPTY; BINS];
+    let mut right_count = [0u32; BINS];
     for axis in 0..3 {
         if scale[axis] == 0.0 {
             continue;
         }
+        let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
         // Sweep from the right: bounds and count of everything right of each boundary.
-        let mut right_box = [Box4::EMPTY; BINS];
-        let mut right_count = [0u32; BINS];
         let mut acc = Box4::EMPTY;
         let mut n = 0;
-        for i in (1..BINS).rev() {
-            acc = acc.union(&boxes[axis][i]);
-            n += counts[axis][i];
+        for i in (1..nb).rev() {
+            acc = acc.union(&boxes[i]);
+            n += counts[i];
             right_box[i] = acc;
             right_count[i] = n;
         }
         let mut acc = Box4::EMPTY;
         let mut n = 0;
-        for i in 1..BINS {
-            acc = acc.union(&boxes[axis][i - 1]);
-            n += counts[axis][i - 1];
+        for i in 1..nb {
+            acc = acc.union(&boxes[i - 1]);
+            n += counts[i - 1];
             if n == 0 || right_count[i] == 0 {
                 continue;
             }
@@ -294,7 +309,8 @@ fn best_split(refs: &[PrimRef], centroids: &Box4) -> Option<Split> {
 /// Partitions by the split's bin boundary (the same bin arithmetic as [`best_split`]); returns
 /// the split position and the two sides' centroid bounds, gathered on the way.
 fn partition_by_bin(refs: &mut [PrimRef], s: &Split, centroids: &Box4) -> (usize, Box4, Box4) {
-    let scale = bin_scale(centroids);
+    let nb = bins_for(refs.len());
+    let scale = bin_scale(centroids, nb);
     let lo = centroids.min;
     let (mut cl, mut cr) = (Box4::EMPTY, Box4::EMPTY);
     let mut i = 0;
@@ -303,7 +319,7 @@ fn partition_by_bin(refs: &mut [PrimRef], s: &Split, centroids: &Box4) -> (usize
     // unexamined one at j - 1.
     while i < j {
         let c = refs[i].centroid2();
-        if bin_index(c, lo, scale)[s.axis] < s.boundary {
+        if bin_index(c, lo, scale, nb)[s.axis] < s.boundary {
             cl.grow(c, c);
             i += 1;
         } else {
