@@ -257,9 +257,9 @@ fn best_split(refs: &[PrimRef], centroids: &Box4, bins: &mut Bins) -> Option<Spl
     }
     for r in refs {
         let b3 = bin_index(r.centroid2(), lo, scale, nb);
-        for axis in 0..3 {
+        for (axis, b) in b3.into_iter().enumerate() {
             // (the mask only tells the compiler the index is in range)
-            let b = b3[axis] & (BINS - 1);
+            let b = b & (BINS - 1);
             bins.counts[axis][b] += 1;
             bins.boxes[axis][b].grow(r.min, r.max);
         }
