@@ -110,13 +110,15 @@ pub fn bitmask(mask: Mask) -> u32 {
 /// Lane-wise minimum.
 #[inline(always)]
 pub fn min(a: F32x8, b: F32x8) -> F32x8 {
-    a.min(b)
+    // One `vminps`: lanes holding NaN give `b` (x86 semantics). Callers never pass NaN.
+    a.fast_min(b)
 }
 
 /// Lane-wise maximum.
 #[inline(always)]
 pub fn max(a: F32x8, b: F32x8) -> F32x8 {
-    a.max(b)
+    // One `vmaxps`: lanes holding NaN give `b` (x86 semantics). Callers never pass NaN.
+    a.fast_max(b)
 }
 
 /// Lane-wise square root.
