@@ -602,7 +602,7 @@ impl<W: Write> Report<W> {
     fn line(&mut self, text: &str) -> Result<()> {
         writeln!(self.out, "{text}")
             .and_then(|()| self.out.flush())
-            .map_err(|e| Error::Other(format!("cannot write the report: {e}")))
+            .map_err(|e| Error::io(std::path::Path::new("<stdout>"), "write the report", e))
     }
 
     /// One traced kernel: `rays` rays, `hits` of them hit, best time `secs`.

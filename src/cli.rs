@@ -337,10 +337,17 @@ fn usage_text(e: Error) -> String {
 }
 
 /// Loads the scene, renders it and writes the requested images, ray tree and statistics.
+/// Notes about inert course options follow a success (an error stays the only line).
 pub fn execute(cmd: Command) -> Result<()> {
-    for note in &cmd.notes {
+    let notes = cmd.notes.clone();
+    execute_quietly(cmd)?;
+    for note in &notes {
         eprintln!("{note}");
     }
+    Ok(())
+}
+
+fn execute_quietly(cmd: Command) -> Result<()> {
     render::check_options(&cmd.render)?;
     let (w, h) = (cmd.render.width, cmd.render.height);
     let outputs: Vec<&Path> = cmd

@@ -12,6 +12,12 @@ fn main() -> ExitCode {
     }
     match whitted::cli::run(std::env::args_os().collect()) {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader went away (`whitted bench | head`): nothing left to say, like `cat`.
+        Err(whitted::Error::Io { source, .. })
+            if source.kind() == std::io::ErrorKind::BrokenPipe =>
+        {
+            ExitCode::SUCCESS
+        }
         Err(err) => {
             eprintln!("error: {err}");
             ExitCode::from(2)

@@ -235,7 +235,7 @@ pub fn render_with_progress(
                 nodes: geometry.bvh().nodes.len(),
                 bounded: geometry.len() - geometry.planes.len(),
             };
-            let mut frame = pool.install(|| render_packet(scene, &geometry, opts, progress));
+            let mut frame = pool.install(|| render_packet(scene, &geometry, opts, progress))?;
             frame.accel = Some(accel);
             Ok(frame)
         }
@@ -310,14 +310,24 @@ pub fn trace_ray_tree(
         .generate_ray(Camera::pixel_point(x, y, opts.width, opts.height));
     match opts.tracer {
         Tracer::Reference => {
-            let mut tree = RayTree::new();
-            let sample =
-                ReferenceTracer::new(scene, opts.shade).trace_primary(&ray, Some(&mut tree));
-            Ok((tree, sample.color))
+            // The reference tracer recurses once per bounce: give it the render's stack.
+            std::thread::scope(|s| {
+                std::thread::Builder::new()
+                    .stack_size(stack_size(opts.shade.bounces))
+                    .spawn_scoped(s, || {
+                        let mut tree = RayTree::new();
+                        let tracer = ReferenceTracer::new(scene, opts.shade);
+                        let sample = tracer.trace_primary(&ray, Some(&mut tree));
+                        (tree, sample.color)
+                    })
+                    .map_err(|e| Error::Other(format!("cannot start a thread: {e}")))?
+                    .join()
+                    .map_err(|_| Error::Other("the ray-tree thread failed".to_string()))
+            })
         }
         Tracer::Packet => {
             let geometry = Geometry::from_scene(scene);
-            let (color, tree) = crate::wavefront::trace_pixel_tree(scene, &geometry, opts, x, y);
+            let (color, tree) = crate::wavefront::trace_pixel_tree(scene, &geometry, opts, x, y)?;
             Ok((tree, color))
         }
     }

@@ -50,7 +50,7 @@ fn render_tiny_target(text: &str) {
         render::check_options(&opts).unwrap();
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
         common::assert_finite(&render::render_reference(&scene, &opts, &|_| {}), text);
-        let packet = whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {});
+        let packet = whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap();
         common::assert_finite(&packet, text);
     }
 }

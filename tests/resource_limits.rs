@@ -203,3 +203,40 @@ fn a_negative_weight_is_refused() {
         "weight -1: expected a non-negative number (see `whitted --help`)"
     );
 }
+
+#[test]
+fn rays_that_multiply_every_bounce_are_refused_before_they_fill_memory() {
+    // Four nested spheres, each reflecting and transmitting 0.9, seen from their centre: every
+    // ray hits a sphere and spawns both a mirror and a refracted ray, most of which stay inside
+    // and hit again, and with --weight 0 nothing prunes them. The rays of a band grow
+    // geometrically; the packet tracer stops at its queue limit (bounce 21 here).
+    let dir = scratch_dir("limits/multiplying");
+    let scene = "PerspectiveCamera { center 0 0 0 direction 0 0 -1 up 0 1 0 angle 60 }
+        Lights { numLights 1 DirectionalLight { direction 0 -1 0 color 1 1 1 } }
+        Materials { numMaterials 1 PhongMaterial { diffuseColor 0.1 0.1 0.1
+            reflectiveColor 0.9 0.9 0.9 transparentColor 0.9 0.9 0.9 indexOfRefraction 1 } }
+        Group { numObjects 4 MaterialIndex 0
+            Sphere { center 0 0 0 radius 1 } Sphere { center 0 0 0 radius 2 }
+            Sphere { center 0 0 0 radius 3 } Sphere { center 0 0 0 radius 4 } }";
+    std::fs::write(dir.join("nest.txt"), scene).unwrap();
+    let run = whitted(
+        &dir,
+        &[
+            "render",
+            "nest.txt",
+            "-o",
+            "out.png",
+            "--size",
+            "4",
+            "2",
+            "--shade-back",
+            "--bounces",
+            "30",
+            "--weight",
+            "0",
+        ],
+    );
+    let msg = run.assert_error("the packet tracer would queue");
+    assert!(msg.contains("lower --bounces, raise --weight, or render with --tracer reference"));
+    assert_eq!(listing(&dir), ["nest.txt"]);
+}

@@ -42,7 +42,7 @@ fuzz_target!(|data: &[u8]| {
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
         for frame in [
             render::render_reference(&scene, &opts, &|_| {}),
-            whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}),
+            whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap(),
         ] {
             if let Some((x, y)) = frame.non_finite_pixel() {
                 let i = (y * frame.width + x) as usize;

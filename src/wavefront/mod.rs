@@ -21,6 +21,7 @@ use std::time::{Duration, Instant};
 use bumpalo::Bump;
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::geometry::Geometry;
 use crate::math::Vec3;
 use crate::raytree::{RayTree, SegmentKind};
@@ -82,7 +83,7 @@ pub fn render_packet(
     geometry: &Geometry,
     opts: &RenderOptions,
     progress: Progress,
-) -> Frame {
+) -> Result<Frame> {
     let (w, h) = (opts.width, opts.height);
     let mut frame = Frame::new(w, h);
     let ctx = Context {
@@ -115,16 +116,16 @@ pub fn render_packet(
                 bounce_time: Vec::new(),
                 tree: None,
             };
-            render_band(&ctx, band, &mut out, arenas);
+            render_band(&ctx, band, &mut out, arenas)?;
             // Sums of overflowing colours stay at the largest finite value, as in the
             // reference tracer.
             for c in out.color.iter_mut() {
                 *c = crate::shade::saturate(*c);
             }
             progress(band.rows);
-            (out.rays, out.bounce_time)
+            Ok((out.rays, out.bounce_time))
         })
-        .reduce(
+        .try_reduce(
             Default::default,
             |(rays_a, mut time_a), (rays_b, time_b)| {
                 if time_a.len() < time_b.len() {
@@ -133,10 +134,10 @@ pub fn render_packet(
                 for (a, b) in time_a.iter_mut().zip(time_b) {
                     *a += b;
                 }
-                (rays_a.merged(rays_b), time_a)
+                Ok((rays_a.merged(rays_b), time_a))
             },
-        );
-    frame
+        )?;
+    Ok(frame)
 }
 
 /// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree; returns the
@@ -147,7 +148,7 @@ pub fn trace_pixel_tree(
     opts: &RenderOptions,
     x: u32,
     y: u32,
-) -> (Vec3, RayTree) {
+) -> Result<(Vec3, RayTree)> {
     let ctx = Context {
         scene,
         geometry,
@@ -171,12 +172,17 @@ pub fn trace_pixel_tree(
         bounce_time: Vec::new(),
         tree: Some(&mut tree),
     };
-    render_band(&ctx, band, &mut out, &mut Arenas::default());
-    (color[0], tree)
+    render_band(&ctx, band, &mut out, &mut Arenas::default())?;
+    Ok((color[0], tree))
 }
 
 /// The per-band driver: camera rays, then bounce after bounce until no ray is left.
-fn render_band(ctx: &Context<'_>, band: Band, out: &mut BandOutput<'_>, arenas: &mut Arenas) {
+fn render_band(
+    ctx: &Context<'_>,
+    band: Band,
+    out: &mut BandOutput<'_>,
+    arenas: &mut Arenas,
+) -> Result<()> {
     let Arenas { even, odd, scratch } = arenas;
     even.reset();
     odd.reset();
@@ -187,17 +193,40 @@ fn render_band(ctx: &Context<'_>, band: Band, out: &mut BandOutput<'_>, arenas: 
     loop {
         let next = run_bounce(ctx, bounce, rays, odd, scratch, out);
         even.reset();
+        let next = check_queue(next, band, bounce)?;
         if next.is_empty() {
-            break;
+            return Ok(());
         }
         bounce += 1;
         rays = run_bounce(ctx, bounce, next, even, scratch, out);
         odd.reset();
+        rays = check_queue(rays, band, bounce)?;
         if rays.is_empty() {
-            break;
+            return Ok(());
         }
         bounce += 1;
     }
+}
+
+/// The most rays one band may queue for a bounce (about 200 MB of queue and hit columns).
+pub const MAX_BAND_RAYS: usize = 1 << 22;
+
+/// Refuses a queue past [`MAX_BAND_RAYS`]: where every hit spawns both a mirror and a refracted
+/// ray whose colours are too bright for the weight cutoff to prune, the rays double each bounce.
+fn check_queue<'a>(next: RayQueue<'a>, band: Band, bounce: u32) -> Result<RayQueue<'a>> {
+    if next.len() <= MAX_BAND_RAYS {
+        return Ok(next);
+    }
+    Err(Error::Limit(format!(
+        "the packet tracer would queue {} rays at bounce {} for rows {}..{} (its limit is \
+         {MAX_BAND_RAYS} per band of rows): there, every hit spawns both a mirror and a refracted \
+         ray and the weight cutoff prunes neither; lower --bounces, raise --weight, or render \
+         with --tracer reference",
+        next.len(),
+        bounce + 1,
+        band.y0,
+        band.y0 + band.rows
+    )))
 }
 
 /// One bounce: intersect the queued rays, shade the hits, trace their shadow rays. Returns the
@@ -220,12 +249,12 @@ fn run_bounce<'n>(
     let hits = intersect_closest(ctx.geometry, &rays, tmin, scratch);
     // Upper bounds: one shadow ray per light and hit (with shadows on), two children per hit.
     let shadows = if ctx.opts.shadows {
-        ctx.scene.lights.len() * rays.len()
+        (ctx.scene.lights.len() * rays.len()).min(MAX_BAND_RAYS)
     } else {
         0
     };
     let children = if bounce < ctx.opts.bounces {
-        2 * rays.len()
+        (2 * rays.len()).min(MAX_BAND_RAYS)
     } else {
         0
     };
