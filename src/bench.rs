@@ -713,8 +713,10 @@ fn build_timed<W: Write>(
             geometry = Some(g);
         }
         let rate = prims as f64 / best * 1e-6;
+        let nodes = geometry.as_ref().map_or(0, |g| g.bvh().nodes.len());
         out.line(&format!(
-            "{:<12} {kernel:<16} prims={prims:>8}  best={:>9.2} ms  {rate:>8.2} Mprims/s",
+            "{:<12} {kernel:<16} prims={prims:>8}  best={:>9.2} ms  {rate:>8.2} Mprims/s  \
+             nodes={nodes}",
             scene.name(),
             best * 1e3
         ))?;
