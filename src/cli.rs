@@ -71,7 +71,8 @@ RAY TREE (every ray one pixel spawns; -o is optional with it):
                                (blocked: dashed dark green, X at the occluder), reflected red,
                                transmitted blue, the main camera a white frustum, point lights
                                yellow; parts hidden behind surfaces are drawn fainter; planes
-                               the witness sees from behind are left out (to look into rooms)
+                               and lone triangles the witness sees from behind are left out
+                               (to look into rooms)
     --witness-orbit YAW PITCH  default witness placement: it looks at the eye ray's first hit
                                from the main camera's side turned YAW degrees about the vertical
                                axis (positive: to the right) and raised PITCH degrees, as near as

@@ -16,8 +16,8 @@
 //! point lights within twice the main camera's distance of that hit (farther ones may leave
 //! the picture): centred on their extent across the view, as near as keeps them in the middle
 //! 85% of the picture. [`WitnessPlace::At`] places it explicitly instead. The witness sees the
-//! scene through [`cutaway`]: planes it would see from behind are left out, so it can look
-//! into a room of walls (the facing mirrors) from outside.
+//! scene through [`cutaway`]: planes and lone triangles it would see from behind are left out,
+//! so it can look into a room of walls (the facing mirrors) from outside.
 //!
 //! Drawing: segments are clipped against the witness camera's near plane in 3D and against the
 //! image in 2D, drawn 2-3 pixels wide (scaled with the image) with anti-aliased edges over a dark
