@@ -2,7 +2,8 @@
 //! bumpalo arena that is reset once the bounce that reads it is over. [`RayQueue`] holds rays
 //! to intersect (camera rays at bounce 0, mirror and refracted rays after), [`ShadowQueue`]
 //! the shadow rays of one bounce, [`HitColumns`] the closest hits of a ray queue. Each queue has
-//! a `push_*` per kind of ray that sets every field, and loads its rays as 8-lane packets.
+//! a `push_*` per kind of ray that sets every field, and loads its rays as 8-lane packets
+//! through the [`RayColumns`] they share.
 
 use bumpalo::Bump;
 use bumpalo::collections::Vec as BVec;
@@ -15,14 +16,81 @@ use crate::simd::{F32x8, LANES, Vec3x8, load_partial, mask_first};
 /// Marks a ray that is not recorded in a ray tree.
 pub const NO_NODE: u32 = u32::MAX;
 
-/// Rays to intersect in one bounce, and what each one carries.
-pub struct RayQueue<'b> {
+/// Origins and directions of queued rays, one column per coordinate.
+pub struct RayColumns<'b> {
     ox: BVec<'b, f32>,
     oy: BVec<'b, f32>,
     oz: BVec<'b, f32>,
     dx: BVec<'b, f32>,
     dy: BVec<'b, f32>,
     dz: BVec<'b, f32>,
+}
+
+impl<'b> RayColumns<'b> {
+    /// Empty columns with room for `n` rays in `arena`.
+    pub fn with_capacity_in(n: usize, arena: &'b Bump) -> RayColumns<'b> {
+        RayColumns {
+            ox: BVec::with_capacity_in(n, arena),
+            oy: BVec::with_capacity_in(n, arena),
+            oz: BVec::with_capacity_in(n, arena),
+            dx: BVec::with_capacity_in(n, arena),
+            dy: BVec::with_capacity_in(n, arena),
+            dz: BVec::with_capacity_in(n, arena),
+        }
+    }
+
+    fn push(&mut self, ray: &Ray) {
+        self.ox.push(ray.origin.x);
+        self.oy.push(ray.origin.y);
+        self.oz.push(ray.origin.z);
+        self.dx.push(ray.dir.x);
+        self.dy.push(ray.dir.y);
+        self.dz.push(ray.dir.z);
+    }
+
+    /// The number of rays.
+    pub fn len(&self) -> usize {
+        self.ox.len()
+    }
+
+    /// True when there is no ray.
+    pub fn is_empty(&self) -> bool {
+        self.ox.is_empty()
+    }
+
+    /// Ray `i`.
+    pub fn ray(&self, i: usize) -> Ray {
+        Ray::new(
+            Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
+            Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
+        )
+    }
+
+    /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet
+    /// starting at `tmin`.
+    pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
+        let end = (first + LANES).min(self.len());
+        let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
+        RayPacket {
+            origin: Vec3x8 {
+                x: col(&self.ox),
+                y: col(&self.oy),
+                z: col(&self.oz),
+            },
+            dir: Vec3x8 {
+                x: col(&self.dx),
+                y: col(&self.dy),
+                z: col(&self.dz),
+            },
+            tmin: F32x8::splat(tmin),
+            active: mask_first(end - first),
+        }
+    }
+}
+
+/// Rays to intersect in one bounce, and what each one carries.
+pub struct RayQueue<'b> {
+    rays: RayColumns<'b>,
     /// Pixel index inside the band being rendered.
     pub pixel: BVec<'b, u32>,
     /// RGB factor the colour seen along the ray is multiplied by before reaching the pixel.
@@ -40,12 +108,7 @@ impl<'b> RayQueue<'b> {
     /// just reallocates).
     pub fn with_capacity_in(n: usize, arena: &'b Bump) -> RayQueue<'b> {
         RayQueue {
-            ox: BVec::with_capacity_in(n, arena),
-            oy: BVec::with_capacity_in(n, arena),
-            oz: BVec::with_capacity_in(n, arena),
-            dx: BVec::with_capacity_in(n, arena),
-            dy: BVec::with_capacity_in(n, arena),
-            dz: BVec::with_capacity_in(n, arena),
+            rays: RayColumns::with_capacity_in(n, arena),
             pixel: BVec::with_capacity_in(n, arena),
             throughput: BVec::with_capacity_in(n, arena),
             weight: BVec::with_capacity_in(n, arena),
@@ -63,12 +126,7 @@ impl<'b> RayQueue<'b> {
         kind: SegmentKind,
         parent: u32,
     ) {
-        self.ox.push(ray.origin.x);
-        self.oy.push(ray.origin.y);
-        self.oz.push(ray.origin.z);
-        self.dx.push(ray.dir.x);
-        self.dy.push(ray.dir.y);
-        self.dz.push(ray.dir.z);
+        self.rays.push(ray);
         self.pixel.push(pixel);
         self.throughput.push(throughput);
         self.weight.push(weight);
@@ -121,51 +179,28 @@ impl<'b> RayQueue<'b> {
 
     /// The number of queued rays.
     pub fn len(&self) -> usize {
-        self.ox.len()
+        self.rays.len()
     }
 
     /// True when no ray is queued.
     pub fn is_empty(&self) -> bool {
-        self.ox.is_empty()
+        self.rays.is_empty()
     }
 
     /// Ray `i`.
     pub fn ray(&self, i: usize) -> Ray {
-        Ray::new(
-            Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
-            Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
-        )
+        self.rays.ray(i)
     }
 
     /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet.
     pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
-        let end = (first + LANES).min(self.len());
-        let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
-        RayPacket {
-            origin: Vec3x8 {
-                x: col(&self.ox),
-                y: col(&self.oy),
-                z: col(&self.oz),
-            },
-            dir: Vec3x8 {
-                x: col(&self.dx),
-                y: col(&self.dy),
-                z: col(&self.dz),
-            },
-            tmin: F32x8::splat(tmin),
-            active: mask_first(end - first),
-        }
+        self.rays.packet(first, tmin)
     }
 }
 
 /// Shadow rays of one bounce: each carries the colour it adds to its pixel if unblocked.
 pub struct ShadowQueue<'b> {
-    ox: BVec<'b, f32>,
-    oy: BVec<'b, f32>,
-    oz: BVec<'b, f32>,
-    dx: BVec<'b, f32>,
-    dy: BVec<'b, f32>,
-    dz: BVec<'b, f32>,
+    rays: RayColumns<'b>,
     /// Blocked by hits in `(EPSILON, max_t)`.
     pub max_t: BVec<'b, f32>,
     pub pixel: BVec<'b, u32>,
@@ -181,12 +216,7 @@ impl<'b> ShadowQueue<'b> {
     /// An empty queue with room for `n` shadow rays in `arena`.
     pub fn with_capacity_in(n: usize, arena: &'b Bump) -> ShadowQueue<'b> {
         ShadowQueue {
-            ox: BVec::with_capacity_in(n, arena),
-            oy: BVec::with_capacity_in(n, arena),
-            oz: BVec::with_capacity_in(n, arena),
-            dx: BVec::with_capacity_in(n, arena),
-            dy: BVec::with_capacity_in(n, arena),
-            dz: BVec::with_capacity_in(n, arena),
+            rays: RayColumns::with_capacity_in(n, arena),
             max_t: BVec::with_capacity_in(n, arena),
             pixel: BVec::with_capacity_in(n, arena),
             contribution: BVec::with_capacity_in(n, arena),
@@ -205,12 +235,7 @@ impl<'b> ShadowQueue<'b> {
         light: u32,
         parent: u32,
     ) {
-        self.ox.push(ray.origin.x);
-        self.oy.push(ray.origin.y);
-        self.oz.push(ray.origin.z);
-        self.dx.push(ray.dir.x);
-        self.dy.push(ray.dir.y);
-        self.dz.push(ray.dir.z);
+        self.rays.push(ray);
         self.max_t.push(max_t);
         self.pixel.push(pixel);
         self.contribution.push(contribution);
@@ -220,41 +245,24 @@ impl<'b> ShadowQueue<'b> {
 
     /// The number of queued shadow rays.
     pub fn len(&self) -> usize {
-        self.ox.len()
+        self.rays.len()
     }
 
     /// True when no shadow ray is queued.
     pub fn is_empty(&self) -> bool {
-        self.ox.is_empty()
+        self.rays.is_empty()
     }
 
     /// Shadow ray `i`.
     pub fn ray(&self, i: usize) -> Ray {
-        Ray::new(
-            Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
-            Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
-        )
+        self.rays.ray(i)
     }
 
     /// Shadow rays `first..first + 8` as a packet starting at `tmin`, with their `max_t`.
     pub fn packet(&self, first: usize, tmin: f32) -> (RayPacket, F32x8) {
         let end = (first + LANES).min(self.len());
-        let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
-        let rays = RayPacket {
-            origin: Vec3x8 {
-                x: col(&self.ox),
-                y: col(&self.oy),
-                z: col(&self.oz),
-            },
-            dir: Vec3x8 {
-                x: col(&self.dx),
-                y: col(&self.dy),
-                z: col(&self.dz),
-            },
-            tmin: F32x8::splat(tmin),
-            active: mask_first(end - first),
-        };
-        (rays, col(&self.max_t))
+        let max_t = load_partial(&self.max_t[first..end], 0.0);
+        (self.rays.packet(first, tmin), max_t)
     }
 }
 
