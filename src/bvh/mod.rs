@@ -237,6 +237,13 @@ impl RaySlabs {
     }
 }
 
+thread_local! {
+    /// The closest-hit packet traversal's stack (one per thread, reused by every call; the
+    /// traversal never runs inside its own leaf test).
+    static PACKET_STACK: std::cell::RefCell<Vec<Pending>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// A pending subtree of a packet traversal: the node and its lanes' entry distances.
 #[derive(Clone, Copy)]
 struct Pending {
@@ -279,57 +286,51 @@ impl Bvh {
         }
         let slabs = PacketSlabs::new(rays);
         let mut local = *rays;
-        // At most one entry per level is pending.
-        let mut stack = [Pending {
-            node: 0,
-            near: [0.0; 8],
-            lanes: [0.0; 8],
-        }; MAX_DEPTH];
         let (hit, near) = slabs.test(&self.nodes[0], rays.tmin, *tmax);
-        stack[0] = Pending::new(0, near, hit & rays.active);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let entry = &stack[top];
-            let mut node = entry.node;
-            let (near, lanes) = (from_lanes(entry.near), from_lanes(entry.lanes));
-            // cull: no lane of this subtree can hit nearer than its current hit
-            let mut lanes = lanes & le(near, widen_packet(*tmax));
-            if !any(lanes) {
-                continue;
-            }
-            loop {
-                let n = &self.nodes[node as usize];
-                if n.is_leaf() {
-                    local.active = lanes;
-                    leaf(n.prims(), &local, tmax);
-                    break;
+        // The stack lives with the thread: a fresh array per call cost a 4 KB memset.
+        PACKET_STACK.with_borrow_mut(|stack| {
+            stack.clear();
+            stack.push(Pending::new(0, near, hit & rays.active));
+            while let Some(entry) = stack.pop() {
+                let mut node = entry.node;
+                let (near, lanes) = (from_lanes(entry.near), from_lanes(entry.lanes));
+                // cull: no lane of this subtree can hit nearer than its current hit
+                let mut lanes = lanes & le(near, widen_packet(*tmax));
+                if !any(lanes) {
+                    continue;
                 }
-                let (left, right) = (node + 1, n.first);
-                let (hl, nl) = slabs.test(&self.nodes[left as usize], rays.tmin, *tmax);
-                let (hr, nr) = slabs.test(&self.nodes[right as usize], rays.tmin, *tmax);
-                let (hl, hr) = (hl & lanes, hr & lanes);
-                match (any(hl), any(hr)) {
-                    (false, false) => break,
-                    (true, false) => (node, lanes) = (left, hl),
-                    (false, true) => (node, lanes) = (right, hr),
-                    (true, true) => {
-                        // order: the child more lanes enter first goes first
-                        let both = hl & hr;
-                        let left_first = bitmask(both & lt(nl, nr)).count_ones() * 2
-                            >= bitmask(both).count_ones();
-                        let (first, second) = if left_first {
-                            ((left, hl, nl), (right, hr, nr))
-                        } else {
-                            ((right, hr, nr), (left, hl, nl))
-                        };
-                        stack[top] = Pending::new(second.0, second.2, second.1);
-                        top += 1;
-                        (node, lanes) = (first.0, first.1);
+                loop {
+                    let n = &self.nodes[node as usize];
+                    if n.is_leaf() {
+                        local.active = lanes;
+                        leaf(n.prims(), &local, tmax);
+                        break;
+                    }
+                    let (left, right) = (node + 1, n.first);
+                    let (hl, nl) = slabs.test(&self.nodes[left as usize], rays.tmin, *tmax);
+                    let (hr, nr) = slabs.test(&self.nodes[right as usize], rays.tmin, *tmax);
+                    let (hl, hr) = (hl & lanes, hr & lanes);
+                    match (any(hl), any(hr)) {
+                        (false, false) => break,
+                        (true, false) => (node, lanes) = (left, hl),
+                        (false, true) => (node, lanes) = (right, hr),
+                        (true, true) => {
+                            // order: the child more lanes enter first goes first
+                            let both = hl & hr;
+                            let left_first = bitmask(both & lt(nl, nr)).count_ones() * 2
+                                >= bitmask(both).count_ones();
+                            let (first, second) = if left_first {
+                                ((left, hl, nl), (right, hr, nr))
+                            } else {
+                                ((right, hr, nr), (left, hl, nl))
+                            };
+                            stack.push(Pending::new(second.0, second.2, second.1));
+                            (node, lanes) = (first.0, first.1);
+                        }
                     }
                 }
             }
-        }
+        });
     }
 
     /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves

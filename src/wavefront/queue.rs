@@ -39,6 +39,7 @@ impl<'b> RayColumns<'b> {
         }
     }
 
+    #[inline]
     fn push(&mut self, ray: &Ray) {
         self.ox.push(ray.origin.x);
         self.oy.push(ray.origin.y);
@@ -59,6 +60,7 @@ impl<'b> RayColumns<'b> {
     }
 
     /// Ray `i`.
+    #[inline]
     pub fn ray(&self, i: usize) -> Ray {
         Ray::new(
             Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
@@ -68,6 +70,7 @@ impl<'b> RayColumns<'b> {
 
     /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet
     /// starting at `tmin`.
+    #[inline]
     pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
         let end = (first + LANES).min(self.len());
         let col = |c: &BVec<'b, f32>| load_partial(&c[first..end], 0.0);
@@ -117,6 +120,7 @@ impl<'b> RayQueue<'b> {
         }
     }
 
+    #[inline]
     fn push(
         &mut self,
         ray: &Ray,
@@ -188,11 +192,13 @@ impl<'b> RayQueue<'b> {
     }
 
     /// Ray `i`.
+    #[inline]
     pub fn ray(&self, i: usize) -> Ray {
         self.rays.ray(i)
     }
 
     /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet.
+    #[inline]
     pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
         self.rays.packet(first, tmin)
     }
@@ -226,6 +232,7 @@ impl<'b> ShadowQueue<'b> {
     }
 
     /// Queues a shadow ray towards light number `light`.
+    #[inline]
     pub fn push_shadow(
         &mut self,
         ray: &Ray,
@@ -254,11 +261,13 @@ impl<'b> ShadowQueue<'b> {
     }
 
     /// Shadow ray `i`.
+    #[inline]
     pub fn ray(&self, i: usize) -> Ray {
         self.rays.ray(i)
     }
 
     /// Shadow rays `first..first + 8` as a packet starting at `tmin`, with their `max_t`.
+    #[inline]
     pub fn packet(&self, first: usize, tmin: f32) -> (RayPacket, F32x8) {
         let end = (first + LANES).min(self.len());
         let max_t = load_partial(&self.max_t[first..end], 0.0);
