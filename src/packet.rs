@@ -4,7 +4,7 @@
 //! in their active lanes only, and the shading stage reads hits back lane by lane.
 
 use crate::math::Ray;
-use crate::simd::{F32x8, I32x8, LANES, Mask, Vec3x8, lanes, lanes_i32, mask_none};
+use crate::simd::{F32x8, I32x8, LANES, Mask, Vec3x8, lanes, lanes_i32};
 
 /// The primitive id of a lane that hit nothing.
 pub const NO_HIT: i32 = -1;
@@ -69,15 +69,5 @@ impl HitPacket {
     pub fn lane(&self, i: usize) -> Option<(f32, i32)> {
         let prim = lanes_i32(self.prim)[i];
         (prim != NO_HIT).then(|| (lanes(self.t)[i], prim))
-    }
-}
-
-/// A packet with no active lane (for tests and padding).
-pub fn empty_packet() -> RayPacket {
-    RayPacket {
-        origin: Vec3x8::zero(),
-        dir: Vec3x8::zero(),
-        tmin: F32x8::splat(0.0),
-        active: mask_none(),
     }
 }

@@ -25,12 +25,6 @@ pub fn mask_none() -> Mask {
     F32x8::splat(0.0)
 }
 
-/// A mask with every lane true.
-#[inline(always)]
-pub fn mask_all() -> Mask {
-    F32x8::splat(f32::from_bits(u32::MAX))
-}
-
 /// The mask of the first `n` lanes.
 #[inline]
 pub fn mask_first(n: usize) -> Mask {
@@ -127,25 +121,10 @@ pub fn sqrt(a: F32x8) -> F32x8 {
     a.sqrt()
 }
 
-/// Loads 8 consecutive values.
-#[inline(always)]
-pub fn load(values: &[f32]) -> F32x8 {
-    let lanes: [f32; LANES] = values[..LANES].try_into().expect("8 lanes");
-    F32x8::new(lanes)
-}
-
 /// Loads up to 8 values; missing lanes get `fill`.
 #[inline]
 pub fn load_partial(values: &[f32], fill: f32) -> F32x8 {
     F32x8::new(std::array::from_fn(|i| {
-        values.get(i).copied().unwrap_or(fill)
-    }))
-}
-
-/// Loads up to 8 integers; missing lanes get `fill`.
-#[inline]
-pub fn load_partial_i32(values: &[i32], fill: i32) -> I32x8 {
-    I32x8::new(std::array::from_fn(|i| {
         values.get(i).copied().unwrap_or(fill)
     }))
 }
@@ -168,12 +147,6 @@ pub fn trunc3(v: crate::math::Vec4) -> [usize; 3] {
 #[inline(always)]
 pub fn lanes(a: F32x8) -> [f32; LANES] {
     a.to_array()
-}
-
-/// Sets lane `i` of `a` to `v`.
-#[inline(always)]
-pub fn set_lane_i32(a: &mut I32x8, i: usize, v: i32) {
-    a.as_mut_array()[i] = v;
 }
 
 /// The integer lanes as an array.
@@ -360,7 +333,7 @@ mod tests {
         assert_eq!(bitmask(mask_first(8)), 0xff);
         assert_eq!(bitmask(mask_first(0)), 0);
         assert_eq!(bitmask(mask_from_bits(0b1010_0101)), 0b1010_0101);
-        assert!(all(mask_all()) && !any(mask_none()));
+        assert!(all(mask_first(8)) && !any(mask_none()));
         let m = mask_from_bits(0b0000_0110);
         let s = select_i32(m, I32x8::splat(7), I32x8::splat(-1));
         assert_eq!(lanes_i32(s), [-1, 7, 7, -1, -1, -1, -1, -1]);
