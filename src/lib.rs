@@ -7,9 +7,9 @@
 //!            render(scene, RenderOptions) -> Frame { colour, depth, normal }
 //!                          |  Tracer::Reference: reference.rs, recursive, one ray at a time,
 //!                          |      walks the object tree
-//!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays;
-//!                          |      wavefront/ queues rays per bounce, intersects 8 at a time
-//!                          |      (packet.rs, simd.rs)
+//!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays,
+//!                          |      bvh/ builds a binned-SAH BVH over them; wavefront/ queues
+//!                          |      rays per bounce, intersects 8 at a time (packet.rs, simd.rs)
 //!                          |  shade.rs and intersect/ hold the maths both tracers share
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
