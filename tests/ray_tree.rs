@@ -1,6 +1,6 @@
 //! Claim: the ray tree of one pixel is complete and well formed. A glass-sphere pixel's tree
-//! has all four kinds of segments (eye, shadow, reflected, transmitted) and a mirror pixel's
-//! has eye, shadow and reflected ones; every child starts where its parent ends; the tree is
+//! has all four kinds of segments (eye, shadow, reflected, transmitted), a pure mirror pixel's
+//! has eye, shadow and reflected ones, and a mirror pixel that reflects glass has all four; every child starts where its parent ends; the tree is
 //! the same every time; [`RayTree::canonical`] makes any recording order compare equal (as
 //! the packet tracer's bounce-by-bounce order must); the JSON parses and holds every segment;
 //! the witness picture shows every kind of segment the tree has, in its course colour; and
@@ -39,6 +39,8 @@ fn options() -> RenderOptions {
 const GLASS: (&str, u32, u32) = ("glass_sphere.txt", 230, 150);
 /// A pixel on the left mirror of the facing mirrors: its reflections ping-pong.
 const MIRROR: (&str, u32, u32) = ("facing_mirrors.txt", 60, 100);
+/// A pixel on the showcase's mirror sphere where it reflects the glass sphere.
+const MIRROR_SEES_GLASS: (&str, u32, u32) = ("showcase.txt", 275, 162);
 
 fn tree_of((name, x, y): (&str, u32, u32)) -> RayTree {
     let scene = Scene::load(&scene_path(name)).unwrap();
@@ -374,7 +376,7 @@ fn count_color(img: &whitted::output::Rgb8, color: [f32; 3]) -> usize {
 #[test]
 fn the_witness_picture_shows_every_kind_of_segment_in_the_tree() {
     use whitted::witness::{WitnessSpec, draw_ray_tree, kind_color, witness_camera};
-    for (pixel, blocked) in [(GLASS, true), (MIRROR, false)] {
+    for (pixel, blocked) in [(GLASS, true), (MIRROR, false), (MIRROR_SEES_GLASS, true)] {
         let scene = Scene::load(&scene_path(pixel.0)).unwrap();
         let opts = options();
         let tree = tree_of(pixel);
@@ -402,4 +404,39 @@ fn the_witness_picture_shows_every_kind_of_segment_in_the_tree() {
             );
         }
     }
+}
+
+#[test]
+fn a_mirror_pixel_that_sees_glass_has_all_four_kinds_in_both_tracers() {
+    // The showcase's mirror sphere (primitive 5, material 1) reflects the glass sphere at this
+    // pixel: the tree has eye, shadow, reflected and transmitted segments, and both tracers
+    // record the same one.
+    let scene = Scene::load(&scene_path("showcase.txt")).unwrap();
+    let mut opts = RenderOptions {
+        width: 640,
+        height: 480,
+        ..RenderOptions::default()
+    };
+    opts.shade.shadows = true;
+    opts.shade.shade_back = true;
+    opts.shade.bounces = 5;
+    let (packet, _) = trace_ray_tree(&scene, &opts, 440, 260).unwrap();
+    opts.tracer = whitted::Tracer::Reference;
+    let (reference, _) = trace_ray_tree(&scene, &opts, 440, 260).unwrap();
+    assert_eq!(
+        packet.segments[0].material,
+        Some(1),
+        "the eye ray hits the mirror sphere"
+    );
+    let [eye, shadow, reflected, transmitted] = packet.kind_counts();
+    assert!(
+        eye == 1 && shadow > 0 && reflected > 0 && transmitted > 0,
+        "{:?}",
+        packet.kind_counts()
+    );
+    assert!(
+        packet.approx_eq(&reference, 1e-4),
+        "{:?}",
+        packet.first_difference(&reference, 1e-4)
+    );
 }
