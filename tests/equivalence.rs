@@ -7,23 +7,14 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::{Rng, assert_equivalent, assert_finite, course_dir, render_both};
+use common::{
+    Rng, assert_equivalent, assert_finite, course_dir, our_scenes, render_both, scene_files,
+};
 use whitted::output::{color_image, depth_image, normal_image};
 use whitted::shade::ShadeOptions;
 use whitted::{RenderOptions, Scene};
-
-fn our_scenes() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> =
-        std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"))
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "txt"))
-            .collect();
-    v.sort();
-    v
-}
 
 #[test]
 fn every_scene_of_ours_renders_the_same_with_both_tracers() {
@@ -374,12 +365,7 @@ fn every_later_course_scene_renders_the_same_with_both_tracers() {
     let mut count = 0;
     for a in 5..=7 {
         let dir = course.join(format!("assignment{a}"));
-        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-            .unwrap()
-            .map(|e| e.unwrap().path())
-            .filter(|p| p.extension().is_some_and(|e| e == "txt"))
-            .collect();
-        files.sort();
+        let files = scene_files(&dir);
         for path in files {
             let scene = Scene::load(&path).unwrap();
             let shade = ShadeOptions {

@@ -5,9 +5,9 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use common::course_dir;
+use common::{course_dir, our_scenes, scene_files};
 use whitted::Tracer;
 use whitted::render::{RenderOptions, trace_ray_tree};
 use whitted::scene::Scene;
@@ -52,14 +52,7 @@ fn full() -> ShadeOptions {
 
 #[test]
 fn both_tracers_record_the_same_trees_on_our_scenes() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "txt"))
-        .collect();
-    scenes.sort();
-    for path in scenes {
+    for path in our_scenes() {
         let n = compare_trees(&path, full());
         assert!(n > 49, "{}: only {n} segments", path.display());
         compare_trees(
@@ -79,13 +72,7 @@ fn both_tracers_record_the_same_trees_on_the_a4_course_scenes() {
         eprintln!("skipped: WHITTED_COURSE_DIR is not set");
         return;
     };
-    let dir = course.join("assignment4");
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "txt"))
-        .collect();
-    scenes.sort();
+    let scenes = scene_files(&course.join("assignment4"));
     assert_eq!(scenes.len(), 14);
     for path in scenes {
         compare_trees(&path, full());

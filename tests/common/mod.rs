@@ -123,6 +123,22 @@ pub fn diff(a: &Rgb8, b: &Rgb8, tol: u8) -> Diff {
     }
 }
 
+/// The scene files (`*.txt`) of `dir`, sorted.
+pub fn scene_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "txt"))
+        .collect();
+    files.sort();
+    files
+}
+
+/// Our own scenes, `scenes/*.txt`.
+pub fn our_scenes() -> Vec<PathBuf> {
+    scene_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"))
+}
+
 /// A fresh empty folder under the target directory for one test.
 pub fn scratch_dir(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
