@@ -16,7 +16,8 @@ use crate::math::Vec3;
 use crate::output;
 use crate::progress::RowBar;
 use crate::raytree::TreeSource;
-use crate::render::{self, RenderOptions, Tracer};
+use crate::options::{self, RenderOptions, Tracer};
+use crate::render;
 use crate::scene::Scene;
 use crate::stats::{RayCounts, StatsReport, peak_memory_kib};
 use crate::witness::{self, WitnessPlace, WitnessSpec};
@@ -323,7 +324,7 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
         ));
     }
     if let Some((x, y, _)) = &cmd.ray_tree {
-        render::check_pixel(*x, *y, &cmd.render)
+        options::check_pixel(*x, *y, &cmd.render)
             .map_err(|e| Error::Usage(format!("option --ray-tree: {}", usage_text(e))))?;
     }
     Ok(cmd)
@@ -349,7 +350,7 @@ pub fn execute(cmd: Command) -> Result<()> {
 }
 
 fn execute_quietly(cmd: Command) -> Result<()> {
-    render::check_options(&cmd.render)?;
+    options::check_options(&cmd.render)?;
     let (w, h) = (cmd.render.width, cmd.render.height);
     let outputs: Vec<&Path> = cmd
         .output

@@ -26,9 +26,11 @@ pub mod bench;
 pub mod bvh;
 pub mod cli;
 pub mod error;
+pub mod frame;
 pub mod geometry;
 pub mod intersect;
 pub mod math;
+pub mod options;
 pub mod output;
 pub mod packet;
 pub mod progress;
@@ -43,7 +45,9 @@ pub mod wavefront;
 pub mod witness;
 
 pub use error::{Error, Result};
-pub use render::{Frame, RenderOptions, Tracer, render};
+pub use frame::Frame;
+pub use options::{RenderOptions, Tracer};
+pub use render::render;
 pub use scene::Scene;
 
 /// True when this CPU (and OS) run what the build was compiled for: x86-64-v3's AVX, AVX2,

@@ -26,6 +26,24 @@ impl Ray {
     }
 }
 
+/// Clamps channels that overflowed to infinity down to `f32::MAX`. Colours are never negative
+/// (the parser checks), so sums and products of finite colours are never NaN, only possibly
+/// infinite; saturating every colour that is later multiplied (by a zero shadow factor, say)
+/// keeps `inf * 0 = NaN` out of the pixels.
+#[inline]
+pub fn saturate(c: Vec3) -> Vec3 {
+    c.min(Vec3::splat(f32::MAX))
+}
+
+/// True when a triangle's vertices are (numerically) collinear or coincide.
+pub fn is_degenerate(v: &[Vec3; 3]) -> bool {
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let cross = e1.cross(e2);
+    let area2 = cross.length();
+    !(area2 > 1e-7 * e1.length() * e2.length() && cross.try_normalize().is_some())
+}
+
 /// Mirror direction of `dir` about the normal `n` (unit): `R = V - 2 (V.N) N`. The sign of `n`
 /// does not matter.
 #[inline]

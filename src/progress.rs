@@ -1,5 +1,5 @@
 //! The progress bar the CLI shows on stderr while a render runs. It is fed through the render's
-//! row hook ([`crate::render::Progress`]), appears only once a render has taken about a second,
+//! row hook ([`crate::options::Progress`]), appears only once a render has taken about a second,
 //! and only when stderr is a terminal: piped or redirected stderr (tests, scripts, CI) sees
 //! nothing.
 //!
@@ -46,7 +46,7 @@ impl RowBar {
         }
     }
 
-    /// Counts `rows` more finished rows; the render's [`crate::render::Progress`] hook.
+    /// Counts `rows` more finished rows; the render's [`crate::options::Progress`] hook.
     pub fn rows_done(&self, rows: u32) {
         let Some(bar) = &self.bar else {
             return;

@@ -11,11 +11,16 @@
 //!              + reflective * trace(mirror) + transparent * trace(refracted)
 //! ```
 
-use crate::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
-use crate::math::{Ray, Vec3, transform_normal};
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::frame::Frame;
+use crate::intersect::{Hit, intersect_plane, intersect_sphere, intersect_triangle};
+use crate::math::{Ray, Vec3, saturate, transform_normal};
 use crate::raytree::{RayTree, SegmentId, SegmentKind};
-use crate::scene::{Object, Scene};
-use crate::shade::{self, EPSILON, Hit, ShadeOptions};
+use crate::options::{Progress, RenderOptions, stack_size};
+use crate::scene::{Camera, Object, Scene};
+use crate::shade::{self, EPSILON, ShadeOptions};
 use crate::stats::RayCounts;
 
 /// The closest hit of `ray` with `obj` in `(tmin, tmax)`.
@@ -171,13 +176,73 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
     let mut light = Vec3::ONE;
     let mut tmin = EPSILON;
     while let Some(hit) = closest_hit(&scene.root, ray, tmin, max_t) {
-        light = shade::saturate(light * scene.phong_at(hit.material, ray.at(hit.t)).transparent);
+        light = saturate(light * scene.phong_at(hit.material, ray.at(hit.t)).transparent);
         if light == Vec3::ZERO {
             break;
         }
         tmin = hit.t;
     }
     light
+}
+
+/// Renders with the reference tracer, rows in parallel; each row counts its rays locally and
+/// the counts are summed at the end.
+pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Frame {
+    let (w, h) = (opts.width, opts.height);
+    let mut frame = Frame::new(w, h);
+    let tracer = ReferenceTracer::new(scene, opts.shade);
+    frame.rays = frame
+        .color
+        .par_chunks_mut(w as usize)
+        .zip(frame.depth.par_chunks_mut(w as usize))
+        .zip(frame.normal.par_chunks_mut(w as usize))
+        .enumerate()
+        .map(|(y, ((color, depth), normal))| {
+            let mut rays = RayCounts::default();
+            for x in 0..w {
+                let ray = scene
+                    .camera
+                    .generate_ray(Camera::pixel_point(x, y as u32, w, h));
+                let sample = tracer.trace_primary_counted(&ray, None, &mut rays);
+                let i = x as usize;
+                color[i] = sample.color;
+                if let Some(hit) = sample.hit {
+                    depth[i] = hit.t;
+                    normal[i] = hit.normal;
+                }
+            }
+            progress(1);
+            rays
+        })
+        .reduce(RayCounts::default, RayCounts::merged);
+    frame
+}
+
+/// Traces pixel `(x, y)` of the frame `opts` describes once more, recording its ray tree;
+/// returns the pixel's colour and the tree. The tracer recurses once per bounce, so it runs on
+/// a thread with the render's stack.
+pub fn trace_pixel_tree(
+    scene: &Scene,
+    opts: &RenderOptions,
+    x: u32,
+    y: u32,
+) -> Result<(Vec3, RayTree)> {
+    let ray = scene
+        .camera
+        .generate_ray(Camera::pixel_point(x, y, opts.width, opts.height));
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(stack_size(opts.shade.bounces))
+            .spawn_scoped(s, || {
+                let mut tree = RayTree::new();
+                let tracer = ReferenceTracer::new(scene, opts.shade);
+                let sample = tracer.trace_primary(&ray, Some(&mut tree));
+                (sample.color, tree)
+            })
+            .map_err(|e| Error::Other(format!("cannot start a thread: {e}")))?
+            .join()
+            .map_err(|_| Error::Other("the ray-tree thread failed".to_string()))
+    })
 }
 
 /// The reference tracer over one scene with fixed options.
@@ -303,7 +368,7 @@ impl<'s> ReferenceTracer<'s> {
                     log,
                 );
         }
-        shade::saturate(color)
+        saturate(color)
     }
 }
 

@@ -9,7 +9,8 @@
 //! `max(n.l, 0)` (the lecture's fix; off with `specular_fix = false`, which only clamps it to
 //! zero where `n.l <= 0`). Back faces are black unless `shade_back` flips their normal.
 
-use crate::math::{Ray, Vec3, reflect, refract, schlick};
+use crate::intersect::Hit;
+use crate::math::{Ray, Vec3, reflect, refract, saturate, schlick};
 use crate::scene::{Light, Phong, Scene};
 
 /// Self-intersection offset: shadow, mirror and refracted rays start at `t = EPSILON`.
@@ -48,17 +49,6 @@ impl Default for ShadeOptions {
     }
 }
 
-/// A closest hit as the intersection code reports it, in world space.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    pub t: f32,
-    /// Unit geometric normal, as the primitive defines it (not flipped towards the ray).
-    pub normal: Vec3,
-    pub material: u32,
-    /// The primitive's id (see [`crate::scene::Object`]).
-    pub prim: u32,
-}
-
 /// A hit ready to shade.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
@@ -86,15 +76,6 @@ pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Opti
         front,
         material,
     })
-}
-
-/// Clamps channels that overflowed to infinity down to `f32::MAX`. Colours are never negative
-/// (the parser checks), so sums and products of finite colours are never NaN, only possibly
-/// infinite; saturating every colour that is later multiplied (by a zero shadow factor, say)
-/// keeps `inf * 0 = NaN` out of the pixels.
-#[inline]
-pub fn saturate(c: Vec3) -> Vec3 {
-    c.min(Vec3::splat(f32::MAX))
 }
 
 /// The ambient term of a surface.

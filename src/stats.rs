@@ -12,7 +12,6 @@ use std::fmt::Write as _;
 use std::time::Duration;
 
 use crate::raytree::SegmentKind;
-use crate::render::AccelStats;
 
 /// Rays cast by a tracer, by kind and by bounce. Tracers count into a local value per row (or
 /// per queue) and [`RayCounts::merge`] the results, so counting never contends between
@@ -72,6 +71,17 @@ impl RayCounts {
     pub fn total(&self) -> u64 {
         self.by_kind.iter().sum()
     }
+}
+
+/// What building the packet tracer's geometry cost.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelStats {
+    /// Flattening the scene to SoA arrays and building the BVH.
+    pub build: Duration,
+    /// BVH nodes.
+    pub nodes: usize,
+    /// Primitives in the BVH (planes stay outside).
+    pub bounded: usize,
 }
 
 /// The process's peak resident memory in KiB (`VmHWM` in `/proc/self/status`), where the

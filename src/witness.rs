@@ -29,7 +29,7 @@ use glam::Quat;
 use crate::math::Vec3;
 use crate::output::{Rgb8, color_image};
 use crate::raytree::{EndKind, RayTree, SegmentKind};
-use crate::render::Frame;
+use crate::frame::Frame;
 use crate::scene::{Camera, Object, Projection, Transformed};
 
 /// Default turn of the witness camera about the vertical axis, in degrees.
@@ -987,7 +987,7 @@ mod tests {
         let main = main_camera();
         let mut tree = RayTree::new();
         let ray = crate::math::Ray::new(main.center, main.direction);
-        let hit = crate::shade::Hit {
+        let hit = crate::intersect::Hit {
             t: 5.0,
             normal: Vec3::Z,
             material: 0,

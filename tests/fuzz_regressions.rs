@@ -10,7 +10,9 @@ mod common;
 
 use std::path::Path;
 
-use whitted::render::{self, RenderOptions};
+use whitted::RenderOptions;
+use whitted::options::check_options;
+use whitted::reference::render_reference;
 use whitted::shade::ShadeOptions;
 
 /// The `parse_obj` target.
@@ -47,9 +49,9 @@ fn render_tiny_target(text: &str) {
             threads: 1,
             ..RenderOptions::default()
         };
-        render::check_options(&opts).unwrap();
+        check_options(&opts).unwrap();
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
-        common::assert_finite(&render::render_reference(&scene, &opts, &|_| {}), text);
+        common::assert_finite(&render_reference(&scene, &opts, &|_| {}), text);
         let packet = whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap();
         common::assert_finite(&packet, text);
     }

@@ -15,7 +15,7 @@ use std::path::Path;
 use common::assert_finite;
 use whitted::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
 use whitted::math::{Ray, Vec3};
-use whitted::render::{Frame, RenderOptions, render};
+use whitted::{Frame, RenderOptions, render};
 use whitted::shade::ShadeOptions;
 use whitted::{Scene, scene::parse::parse_str};
 

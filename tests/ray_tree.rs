@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use whitted::raytree::{EndKind, RayTree, SegmentKind, TreeSource};
-use whitted::render::{RenderOptions, trace_ray_tree};
+use whitted::RenderOptions;
+use whitted::render::trace_ray_tree;
 use whitted::scene::Scene;
 
 fn scene_path(name: &str) -> PathBuf {

@@ -9,7 +9,8 @@ use std::path::Path;
 
 use common::{course_dir, our_scenes, scene_files};
 use whitted::Tracer;
-use whitted::render::{RenderOptions, trace_ray_tree};
+use whitted::RenderOptions;
+use whitted::render::trace_ray_tree;
 use whitted::scene::Scene;
 use whitted::shade::ShadeOptions;
 

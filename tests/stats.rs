@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::Command;
 
 use whitted::raytree::SegmentKind;
-use whitted::render::{RenderOptions, render};
+use whitted::{RenderOptions, render};
 use whitted::scene::Scene;
 
 fn run(args: &[&str]) -> (bool, String) {

@@ -6,7 +6,9 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use whitted::render::{self, RenderOptions};
+use whitted::RenderOptions;
+use whitted::options::check_options;
+use whitted::reference::render_reference;
 use whitted::shade::ShadeOptions;
 
 fuzz_target!(|data: &[u8]| {
@@ -37,11 +39,11 @@ fuzz_target!(|data: &[u8]| {
             threads: 1,
             ..RenderOptions::default()
         };
-        render::check_options(&opts).expect("valid options");
+        check_options(&opts).expect("valid options");
         // Straight to the tracers: `render` would start a thread pool for every input.
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
         for frame in [
-            render::render_reference(&scene, &opts, &|_| {}),
+            render_reference(&scene, &opts, &|_| {}),
             whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap(),
         ] {
             if let Some((x, y)) = frame.non_finite_pixel() {

@@ -21,14 +21,13 @@ pub mod soa;
 use crate::bvh::{self, Aabb, Bvh};
 use crate::intersect::sphere::{affine_point, affine_vector};
 use crate::intersect::{
-    intersect_plane, intersect_plane_packet, intersect_sphere, intersect_sphere_packet,
+    Hit, intersect_plane, intersect_plane_packet, intersect_sphere, intersect_sphere_packet,
     intersect_transformed_sphere, intersect_transformed_sphere_packet, intersect_triangle,
     intersect_triangle_packet,
 };
 use crate::math::{Mat3, Mat4, Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::scene::{Object, Scene};
-use crate::shade::Hit;
 use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 use std::ops::Range;

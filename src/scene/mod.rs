@@ -10,6 +10,7 @@
 //! ```
 
 pub mod camera;
+mod input;
 pub mod obj;
 pub mod parse;
 pub mod texture;
@@ -89,7 +90,7 @@ impl Light {
                 let distance = to_light.length();
                 let denom = c + l * distance + q * distance * distance;
                 let color = if denom > 0.0 {
-                    crate::shade::saturate(color / denom)
+                    crate::math::saturate(color / denom)
                 } else {
                     Vec3::ZERO
                 };

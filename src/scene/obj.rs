@@ -13,9 +13,9 @@
 
 use std::path::Path;
 
-use super::parse::{decode_text, is_degenerate, read_file};
+use super::input::{decode_text, read_file};
 use crate::error::{Error, Result};
-use crate::math::Vec3;
+use crate::math::{Vec3, is_degenerate};
 
 /// Loads the triangles of the OBJ file at `path`.
 pub fn load_obj(path: &Path) -> Result<Vec<[Vec3; 3]>> {

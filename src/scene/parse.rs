@@ -35,12 +35,13 @@
 
 use std::path::{Path, PathBuf};
 
+use super::input::{decode_text, read_file};
 use super::obj;
 use super::{
     Camera, Light, Material, Object, Phong, Projection, Scene, Texture, TextureKind, Transformed,
 };
 use crate::error::{Error, Result};
-use crate::math::{Mat4, Vec3};
+use crate::math::{Mat4, Vec3, is_degenerate};
 
 /// The deepest nesting of groups and transforms the parser accepts.
 pub const MAX_NESTING: usize = 256;
@@ -58,47 +59,6 @@ pub fn parse_file(path: &Path) -> Result<Scene> {
     parse_str(text, path)
 }
 
-/// Reads a whole input file. Only regular files are read (a device such as `/dev/zero` would
-/// never end), and a file too large for memory is an error, not an abort.
-pub(crate) fn read_file(path: &Path, action: &'static str) -> Result<Vec<u8>> {
-    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, action, e))?;
-    if !meta.is_file() {
-        let kind = if meta.is_dir() {
-            "a folder"
-        } else {
-            "not a regular file"
-        };
-        return Err(Error::io(
-            path,
-            action,
-            std::io::Error::other(format!("it is {kind}")),
-        ));
-    }
-    // std::fs::read reserves the file's size with try_reserve: no abort on a huge file.
-    std::fs::read(path).map_err(|e| Error::io(path, action, e))
-}
-
-/// Checks that `bytes` are UTF-8 text, naming the first offending byte's position otherwise.
-pub(crate) fn decode_text<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str> {
-    match std::str::from_utf8(bytes) {
-        Ok(text) => Ok(text),
-        Err(e) => {
-            let good = &bytes[..e.valid_up_to()];
-            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
-            let line_start = good.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-            let col = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
-            Err(Error::parse(
-                path,
-                line,
-                col,
-                format!(
-                    "expected UTF-8 text, found byte 0x{:02x}",
-                    bytes[e.valid_up_to()]
-                ),
-            ))
-        }
-    }
-}
 
 /// Parses scene text. `path` names the text in errors and anchors relative OBJ paths.
 pub fn parse_str(text: &str, path: &Path) -> Result<Scene> {
@@ -1162,14 +1122,6 @@ fn is_xform(word: &str) -> bool {
     )
 }
 
-/// True when a triangle's vertices are (numerically) collinear or coincide.
-pub(crate) fn is_degenerate(v: &[Vec3; 3]) -> bool {
-    let e1 = v[1] - v[0];
-    let e2 = v[2] - v[0];
-    let cross = e1.cross(e2);
-    let area2 = cross.length();
-    !(area2 > 1e-7 * e1.length() * e2.length() && cross.try_normalize().is_some())
-}
 
 fn uses_material(obj: &Object, index: u32) -> bool {
     match obj {

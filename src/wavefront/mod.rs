@@ -23,10 +23,10 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::Geometry;
-use crate::math::Vec3;
+use crate::math::{Vec3, saturate};
 use crate::raytree::{RayTree, SegmentKind};
-use crate::render::Progress;
-use crate::render::{Frame, RenderOptions};
+use crate::frame::Frame;
+use crate::options::{Progress, RenderOptions};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
 use crate::stats::RayCounts;
@@ -120,7 +120,7 @@ pub fn render_packet(
             // Sums of overflowing colours stay at the largest finite value, as in the
             // reference tracer.
             for c in out.color.iter_mut() {
-                *c = crate::shade::saturate(*c);
+                *c = saturate(*c);
             }
             progress(band.rows);
             Ok((out.rays, out.bounce_time))

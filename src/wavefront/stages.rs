@@ -7,7 +7,7 @@ use bumpalo::Bump;
 use super::queue::{HitColumns, NO_NODE, RayQueue, ShadowQueue};
 use super::{Band, BandOutput, Context};
 use crate::geometry::Geometry;
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec3, saturate};
 use crate::packet::{HitPacket, NO_HIT};
 use crate::scene::Camera;
 use crate::shade::{self, EPSILON};
@@ -114,7 +114,7 @@ pub fn shade_hits(
                     &sample.shadow,
                     sample.max_t,
                     pixel,
-                    shade::saturate(throughput * sample.color),
+                    saturate(throughput * sample.color),
                     index as u32,
                     node,
                 );
@@ -124,11 +124,11 @@ pub fn shade_hits(
         }
         let [mirror, refracted] = shade::scatter(&s, ray.dir, hit.normal, weight, bounce, ctx.opts);
         if let Some(m) = mirror {
-            let t = shade::saturate(throughput * m.color);
+            let t = saturate(throughput * m.color);
             q.next.push_reflected(&m.ray, pixel, t, m.weight, node);
         }
         if let Some(r) = refracted {
-            let t = shade::saturate(throughput * r.color);
+            let t = saturate(throughput * r.color);
             q.next.push_transmitted(&r.ray, pixel, t, r.weight, node);
         }
     }
@@ -162,7 +162,7 @@ pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut
                         .surface(prims[lane] as u32, &ray, ts[lane])
                         .material;
                     let transparent = ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
-                    light[lane] = shade::saturate(light[lane] * transparent);
+                    light[lane] = saturate(light[lane] * transparent);
                     tmin[lane] = ts[lane];
                     if light[lane] == Vec3::ZERO {
                         active &= !(1 << lane);

@@ -1,0 +1,62 @@
+//! The [`Frame`] a render fills: linear colour per pixel, plus the primary hit's distance and
+//! normal (for the depth and normal images) and what the render cost (rays cast, the packet
+//! tracer's BVH and time per bounce). A leaf of the data flow: both tracers write frames,
+//! `output.rs` turns them into image files, `witness/` draws over them.
+
+use std::time::Duration;
+
+use crate::math::Vec3;
+use crate::stats::{AccelStats, RayCounts};
+
+/// A rendered frame, rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGB per pixel.
+    pub color: Vec<Vec3>,
+    /// Distance along the primary ray to the first hit; `+inf` where nothing was hit.
+    pub depth: Vec<f32>,
+    /// Unit world normal of the first hit; zero where nothing was hit.
+    pub normal: Vec<Vec3>,
+    /// The rays cast to make the frame, by kind and bounce.
+    pub rays: RayCounts,
+    /// Packet tracer: the acceleration structure it built.
+    pub accel: Option<AccelStats>,
+    /// Packet tracer: time spent on each bounce, summed over worker threads.
+    pub bounce_time: Vec<Duration>,
+}
+
+impl Frame {
+    /// The first pixel `(x, y)` holding a NaN or infinite value: in its colour anywhere, in its
+    /// depth and normal where the primary ray hit (depth is `+inf` and the normal zero
+    /// elsewhere). `None` when every value is finite, as it must be.
+    pub fn non_finite_pixel(&self) -> Option<(u32, u32)> {
+        let bad = |i: usize| {
+            let hit = self.depth[i] != f32::INFINITY;
+            !self.color[i].is_finite()
+                || self.depth[i].is_nan()
+                || (hit && !self.normal[i].is_finite())
+                || (!hit && self.normal[i] != Vec3::ZERO)
+        };
+        let w = self.width.max(1) as usize;
+        (0..self.color.len())
+            .find(|&i| bad(i))
+            .map(|i| ((i % w) as u32, (i / w) as u32))
+    }
+
+    /// A black frame with no hits.
+    pub fn new(width: u32, height: u32) -> Frame {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            color: vec![Vec3::ZERO; n],
+            depth: vec![f32::INFINITY; n],
+            normal: vec![Vec3::ZERO; n],
+            rays: RayCounts::default(),
+            accel: None,
+            bounce_time: Vec::new(),
+        }
+    }
+}
