@@ -13,10 +13,10 @@ use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
 use crate::math::Vec3;
+use crate::options::{self, RenderOptions, Tracer};
 use crate::output;
 use crate::progress::RowBar;
 use crate::raytree::TreeSource;
-use crate::options::{self, RenderOptions, Tracer};
 use crate::render;
 use crate::scene::Scene;
 use crate::stats::{RayCounts, StatsReport, peak_memory_kib};

@@ -29,8 +29,8 @@
 use std::fmt::Write as _;
 
 use crate::error::{Error, Result};
-use crate::math::{Ray, Vec3};
 use crate::intersect::Hit;
+use crate::math::{Ray, Vec3};
 
 /// Where a segment ends when its ray escapes the scene, or when it is a shadow ray towards a
 /// directional light (distance along the unit direction, in scene units).

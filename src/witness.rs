@@ -26,10 +26,10 @@
 
 use glam::Quat;
 
+use crate::frame::Frame;
 use crate::math::Vec3;
 use crate::output::{Rgb8, color_image};
 use crate::raytree::{EndKind, RayTree, SegmentKind};
-use crate::frame::Frame;
 use crate::scene::{Camera, Object, Projection, Transformed};
 
 /// Default turn of the witness camera about the vertical axis, in degrees.

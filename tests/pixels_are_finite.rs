@@ -15,8 +15,8 @@ use std::path::Path;
 use common::assert_finite;
 use whitted::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
 use whitted::math::{Ray, Vec3};
-use whitted::{Frame, RenderOptions, render};
 use whitted::shade::ShadeOptions;
+use whitted::{Frame, RenderOptions, render};
 use whitted::{Scene, scene::parse::parse_str};
 
 /// The shading options every scene is rendered under: the defaults, and everything on.

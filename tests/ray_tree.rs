@@ -12,8 +12,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use whitted::raytree::{EndKind, RayTree, SegmentKind, TreeSource};
 use whitted::RenderOptions;
+use whitted::raytree::{EndKind, RayTree, SegmentKind, TreeSource};
 use whitted::render::trace_ray_tree;
 use whitted::scene::Scene;
 

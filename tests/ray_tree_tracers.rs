@@ -8,8 +8,8 @@ mod common;
 use std::path::Path;
 
 use common::{course_dir, our_scenes, scene_files};
-use whitted::Tracer;
 use whitted::RenderOptions;
+use whitted::Tracer;
 use whitted::render::trace_ray_tree;
 use whitted::scene::Scene;
 use whitted::shade::ShadeOptions;

@@ -9,8 +9,8 @@ use std::path::Path;
 use std::process::Command;
 
 use whitted::raytree::SegmentKind;
-use whitted::{RenderOptions, render};
 use whitted::scene::Scene;
+use whitted::{RenderOptions, render};
 
 fn run(args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_whitted"))

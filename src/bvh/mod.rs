@@ -15,7 +15,9 @@ use std::ops::Range;
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select};
+use crate::simd::{
+    F32x8, LANES, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select,
+};
 
 /// The deepest a tree gets (the traversal stacks are sized by it).
 pub const MAX_DEPTH: usize = 64;
@@ -160,7 +162,40 @@ fn widen_packet(t: F32x8) -> F32x8 {
     t + t.abs() * F32x8::splat(ROBUST - 1.0)
 }
 
-/// Per-packet values the box test reuses: origins and reciprocal directions.
+/// Per-ray values the box test reuses: origin and reciprocal direction.
+struct RaySlabs {
+    origin: Vec3,
+    inv: Vec3,
+}
+
+impl RaySlabs {
+    #[inline(always)]
+    fn new(ray: &Ray) -> RaySlabs {
+        let safe = |d: f32| {
+            1.0 / if d.abs() < 1e-30 {
+                1e-30f32.copysign(d)
+            } else {
+                d
+            }
+        };
+        RaySlabs {
+            origin: ray.origin,
+            inv: Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z)),
+        }
+    }
+
+    /// The entry distance if the ray meets the box within `(tmin, tmax)`.
+    #[inline(always)]
+    fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> Option<f32> {
+        let lo = (Vec3::from(n.min) - self.origin) * self.inv;
+        let hi = (Vec3::from(n.max) - self.origin) * self.inv;
+        let near = lo.min(hi).max_element().max(tmin);
+        let far = widen(lo.max(hi).min_element().min(tmax));
+        (near <= far).then_some(near)
+    }
+}
+
+/// [`RaySlabs`] for 8 rays: origins and reciprocal directions.
 struct PacketSlabs {
     origin: Vec3x8,
     inv: Vec3x8,
@@ -204,39 +239,6 @@ impl PacketSlabs {
     }
 }
 
-/// Single-ray twin of [`PacketSlabs`].
-struct RaySlabs {
-    origin: Vec3,
-    inv: Vec3,
-}
-
-impl RaySlabs {
-    #[inline(always)]
-    fn new(ray: &Ray) -> RaySlabs {
-        let safe = |d: f32| {
-            1.0 / if d.abs() < 1e-30 {
-                1e-30f32.copysign(d)
-            } else {
-                d
-            }
-        };
-        RaySlabs {
-            origin: ray.origin,
-            inv: Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z)),
-        }
-    }
-
-    /// The entry distance if the ray meets the box within `(tmin, tmax)`.
-    #[inline(always)]
-    fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> Option<f32> {
-        let lo = (Vec3::from(n.min) - self.origin) * self.inv;
-        let hi = (Vec3::from(n.max) - self.origin) * self.inv;
-        let near = lo.min(hi).max_element().max(tmin);
-        let far = widen(lo.max(hi).min_element().min(tmax));
-        (near <= far).then_some(near)
-    }
-}
-
 thread_local! {
     /// The closest-hit packet traversal's stack (one per thread, reused by every call; the
     /// traversal never runs inside its own leaf test).
@@ -248,8 +250,8 @@ thread_local! {
 #[derive(Clone, Copy)]
 struct Pending {
     node: u32,
-    near: [f32; 8],
-    lanes: [f32; 8],
+    near: [f32; LANES],
+    lanes: [f32; LANES],
 }
 
 impl Pending {
@@ -268,6 +270,58 @@ impl Bvh {
     /// True when the tree has no node.
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
+    }
+
+    /// Single-ray twin of [`Bvh::closest_packet`]: `leaf(range, tmax)` lowers `tmax` on hits.
+    pub fn closest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: &mut f32,
+        mut leaf: impl FnMut(Range<u32>, &mut f32),
+    ) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let slabs = RaySlabs::new(ray);
+        let Some(near) = slabs.test(&self.nodes[0], tmin, *tmax) else {
+            return;
+        };
+        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
+        stack[0] = (0, near);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (mut node, near) = stack[top];
+            if near > widen(*tmax) {
+                continue;
+            }
+            loop {
+                let n = &self.nodes[node as usize];
+                if n.is_leaf() {
+                    leaf(n.prims(), tmax);
+                    break;
+                }
+                let (left, right) = (node + 1, n.first);
+                let l = slabs.test(&self.nodes[left as usize], tmin, *tmax);
+                let r = slabs.test(&self.nodes[right as usize], tmin, *tmax);
+                match (l, r) {
+                    (None, None) => break,
+                    (Some(_), None) => node = left,
+                    (None, Some(_)) => node = right,
+                    (Some(nl), Some(nr)) => {
+                        let (first, second) = if nl <= nr {
+                            (left, (right, nr))
+                        } else {
+                            (right, (left, nl))
+                        };
+                        stack[top] = second;
+                        top += 1;
+                        node = first;
+                    }
+                }
+            }
+        }
     }
 
     /// Visits, for the active lanes of `rays`, every leaf one of them may hit nearer than its
@@ -333,114 +387,6 @@ impl Bvh {
         });
     }
 
-    /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves
-    /// until every active lane is occluded; `leaf(range, rays)` returns the lanes (of the
-    /// packet's active ones) blocked by the leaf's primitives.
-    pub fn occluded_packet(
-        &self,
-        rays: &RayPacket,
-        tmax: F32x8,
-        mut leaf: impl FnMut(Range<u32>, &RayPacket) -> Mask,
-    ) -> Mask {
-        let mut occluded = crate::simd::mask_none();
-        if self.nodes.is_empty() || !any(rays.active) {
-            return occluded;
-        }
-        let slabs = PacketSlabs::new(rays);
-        let mut local = *rays;
-        let mut stack = [(0u32, rays.active); MAX_DEPTH];
-        let (hit, _) = slabs.test(&self.nodes[0], rays.tmin, tmax);
-        stack[0] = (0, hit & rays.active);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (mut node, lanes) = stack[top];
-            let mut lanes = lanes & !occluded;
-            if !any(lanes) {
-                continue;
-            }
-            loop {
-                let n = &self.nodes[node as usize];
-                if n.is_leaf() {
-                    local.active = lanes;
-                    occluded |= leaf(n.prims(), &local);
-                    // early exit: every active lane is blocked
-                    if all(occluded | !rays.active) {
-                        return occluded;
-                    }
-                    break;
-                }
-                let (left, right) = (node + 1, n.first);
-                let (hl, _) = slabs.test(&self.nodes[left as usize], rays.tmin, tmax);
-                let (hr, _) = slabs.test(&self.nodes[right as usize], rays.tmin, tmax);
-                let (hl, hr) = (hl & lanes, hr & lanes);
-                match (any(hl), any(hr)) {
-                    (false, false) => break,
-                    (true, false) => (node, lanes) = (left, hl),
-                    (false, true) => (node, lanes) = (right, hr),
-                    (true, true) => {
-                        stack[top] = (right, hr);
-                        top += 1;
-                        (node, lanes) = (left, hl);
-                    }
-                }
-            }
-        }
-        occluded
-    }
-
-    /// Single-ray twin of [`Bvh::closest_packet`]: `leaf(range, tmax)` lowers `tmax` on hits.
-    pub fn closest(
-        &self,
-        ray: &Ray,
-        tmin: f32,
-        tmax: &mut f32,
-        mut leaf: impl FnMut(Range<u32>, &mut f32),
-    ) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let slabs = RaySlabs::new(ray);
-        let Some(near) = slabs.test(&self.nodes[0], tmin, *tmax) else {
-            return;
-        };
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        stack[0] = (0, near);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (mut node, near) = stack[top];
-            if near > widen(*tmax) {
-                continue;
-            }
-            loop {
-                let n = &self.nodes[node as usize];
-                if n.is_leaf() {
-                    leaf(n.prims(), tmax);
-                    break;
-                }
-                let (left, right) = (node + 1, n.first);
-                let l = slabs.test(&self.nodes[left as usize], tmin, *tmax);
-                let r = slabs.test(&self.nodes[right as usize], tmin, *tmax);
-                match (l, r) {
-                    (None, None) => break,
-                    (Some(_), None) => node = left,
-                    (None, Some(_)) => node = right,
-                    (Some(nl), Some(nr)) => {
-                        let (first, second) = if nl <= nr {
-                            (left, (right, nr))
-                        } else {
-                            (right, (left, nl))
-                        };
-                        stack[top] = second;
-                        top += 1;
-                        node = first;
-                    }
-                }
-            }
-        }
-    }
-
     /// Single-ray twin of [`Bvh::occluded_packet`]: stops at the first leaf that blocks.
     pub fn occluded(
         &self,
@@ -495,6 +441,62 @@ impl Bvh {
             top -= 1;
             node = stack[top];
         }
+    }
+
+    /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves
+    /// until every active lane is occluded; `leaf(range, rays)` returns the lanes (of the
+    /// packet's active ones) blocked by the leaf's primitives.
+    pub fn occluded_packet(
+        &self,
+        rays: &RayPacket,
+        tmax: F32x8,
+        mut leaf: impl FnMut(Range<u32>, &RayPacket) -> Mask,
+    ) -> Mask {
+        let mut occluded = crate::simd::mask_none();
+        if self.nodes.is_empty() || !any(rays.active) {
+            return occluded;
+        }
+        let slabs = PacketSlabs::new(rays);
+        let mut local = *rays;
+        let mut stack = [(0u32, rays.active); MAX_DEPTH];
+        let (hit, _) = slabs.test(&self.nodes[0], rays.tmin, tmax);
+        stack[0] = (0, hit & rays.active);
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (mut node, lanes) = stack[top];
+            let mut lanes = lanes & !occluded;
+            if !any(lanes) {
+                continue;
+            }
+            loop {
+                let n = &self.nodes[node as usize];
+                if n.is_leaf() {
+                    local.active = lanes;
+                    occluded |= leaf(n.prims(), &local);
+                    // early exit: every active lane is blocked
+                    if all(occluded | !rays.active) {
+                        return occluded;
+                    }
+                    break;
+                }
+                let (left, right) = (node + 1, n.first);
+                let (hl, _) = slabs.test(&self.nodes[left as usize], rays.tmin, tmax);
+                let (hr, _) = slabs.test(&self.nodes[right as usize], rays.tmin, tmax);
+                let (hl, hr) = (hl & lanes, hr & lanes);
+                match (any(hl), any(hr)) {
+                    (false, false) => break,
+                    (true, false) => (node, lanes) = (left, hl),
+                    (false, true) => (node, lanes) = (right, hr),
+                    (true, true) => {
+                        stack[top] = (right, hr);
+                        top += 1;
+                        (node, lanes) = (left, hl);
+                    }
+                }
+            }
+        }
+        occluded
     }
 
     /// Checks the tree's invariants against the primitive bounds and tags it was built from

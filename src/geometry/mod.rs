@@ -257,17 +257,6 @@ impl Geometry {
         best
     }
 
-    /// True if anything lies on the ray in `(tmin, tmax)`.
-    pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let leaf = |range: Range<u32>| self.occluded_in(range, ray, tmin, tmax);
-        let bounded = if self.bvh.is_empty() {
-            leaf(self.bounded_range())
-        } else {
-            self.bvh.occluded(ray, tmin, tmax, leaf)
-        };
-        bounded || leaf(self.planes_range())
-    }
-
     /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
     /// are left untouched.
     pub fn closest_hit_packet(&self, rays: &RayPacket, hit: &mut HitPacket) {
@@ -280,6 +269,17 @@ impl Geometry {
             });
         }
         self.closest_in_packet(self.planes_range(), rays, t, prim);
+    }
+
+    /// True if anything lies on the ray in `(tmin, tmax)`.
+    pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        let leaf = |range: Range<u32>| self.occluded_in(range, ray, tmin, tmax);
+        let bounded = if self.bvh.is_empty() {
+            leaf(self.bounded_range())
+        } else {
+            self.bvh.occluded(ray, tmin, tmax, leaf)
+        };
+        bounded || leaf(self.planes_range())
     }
 
     /// The active lanes with something in `(tmin, tmax)`; stops as soon as every active lane is
@@ -363,33 +363,6 @@ impl Geometry {
         best
     }
 
-    /// Brute-force any hit over a range of geometry indices.
-    fn occluded_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let mut hit = false;
-        self.for_kinds(range, |kind, mut idx, _| {
-            hit = hit
-                || match kind {
-                    PrimKind::Triangle => idx.any(|i| {
-                        let (v0, e1, e2) = self.triangles.get(i);
-                        intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
-                    }),
-                    PrimKind::Sphere => idx.any(|i| {
-                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
-                        intersect_sphere(c, r2, ray, tmin, tmax).is_some()
-                    }),
-                    PrimKind::TransformedSphere => idx.any(|i| {
-                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax)
-                            .is_some()
-                    }),
-                    PrimKind::Plane => idx.any(|i| {
-                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-                        intersect_plane(n, d, ray, tmin, tmax).is_some()
-                    }),
-                };
-        });
-        hit
-    }
-
     /// Brute-force closest hits of a packet over a range of geometry indices.
     #[inline(always)]
     fn closest_in_packet(
@@ -422,6 +395,33 @@ impl Geometry {
                 *prim = select_i32(m, I32x8::splat((base + i) as i32), *prim);
             }
         });
+    }
+
+    /// Brute-force any hit over a range of geometry indices.
+    fn occluded_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        let mut hit = false;
+        self.for_kinds(range, |kind, mut idx, _| {
+            hit = hit
+                || match kind {
+                    PrimKind::Triangle => idx.any(|i| {
+                        let (v0, e1, e2) = self.triangles.get(i);
+                        intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
+                    }),
+                    PrimKind::Sphere => idx.any(|i| {
+                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+                        intersect_sphere(c, r2, ray, tmin, tmax).is_some()
+                    }),
+                    PrimKind::TransformedSphere => idx.any(|i| {
+                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax)
+                            .is_some()
+                    }),
+                    PrimKind::Plane => idx.any(|i| {
+                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                        intersect_plane(n, d, ray, tmin, tmax).is_some()
+                    }),
+                };
+        });
+        hit
     }
 
     /// Brute-force any hit of a packet over a range of geometry indices; stops once every

@@ -59,7 +59,6 @@ pub fn parse_file(path: &Path) -> Result<Scene> {
     parse_str(text, path)
 }
 
-
 /// Parses scene text. `path` names the text in errors and anchors relative OBJ paths.
 pub fn parse_str(text: &str, path: &Path) -> Result<Scene> {
     match tokenize(text) {
@@ -1121,7 +1120,6 @@ fn is_xform(word: &str) -> bool {
             | "Matrix"
     )
 }
-
 
 fn uses_material(obj: &Object, index: u32) -> bool {
     match obj {

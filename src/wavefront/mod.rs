@@ -22,11 +22,11 @@ use bumpalo::Bump;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 use crate::geometry::Geometry;
 use crate::math::{Vec3, saturate};
-use crate::raytree::{RayTree, SegmentKind};
-use crate::frame::Frame;
 use crate::options::{Progress, RenderOptions};
+use crate::raytree::{RayTree, SegmentKind};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
 use crate::stats::RayCounts;
