@@ -1,10 +1,40 @@
 //! whitted: a Whitted-style ray tracer for the MIT 6.837 scene format, with a scalar reference
 //! tracer that is the specification and an 8-wide SIMD packet tracer held to it.
 //!
+//! # Example
+//!
+//! Load a scene, render it with shadows, write a PNG:
+//!
+//! ```
+//! use std::path::Path;
+//! use whitted::{RenderOptions, Scene, output};
+//!
+//! # fn main() -> whitted::Result<()> {
+//! let scene = Scene::load(Path::new("scenes/glass_sphere.txt"))?;
+//! let mut opts = RenderOptions {
+//!     width: 160,
+//!     height: 120,
+//!     ..RenderOptions::default()
+//! };
+//! opts.shade.shadows = true;
+//! let frame = whitted::render(&scene, &opts)?;
+//! let png = std::env::temp_dir().join("whitted-doc-example.png");
+//! output::write_image(&output::color_image(&frame), &png)?;
+//! assert_eq!(output::read_png(&png)?.width, 160);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! A crate that embeds whitted builds it with its own flags: give it
+//! `-C target-cpu=x86-64-v3` (AVX2 and FMA) as this crate's `.cargo/config.toml` does, or the
+//! packet tracer runs on SSE2 at about half speed.
+//!
+//! # Data flow
+//!
 //! ```text
-//! scene file --parse--> Scene { camera, lights, materials, object tree }
+//! scene file --scene::parse--> Scene { camera, lights, materials, object tree }
 //!                          |
-//!            render(scene, RenderOptions) -> Frame { colour, depth, normal }
+//!            render::render(scene, RenderOptions) -> Frame { colour, depth, normal }
 //!                          |  Tracer::Reference: reference.rs, recursive, one ray at a time,
 //!                          |      walks the object tree
 //!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays,
@@ -14,34 +44,64 @@
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
 //!
-//! one pixel again --trace_ray_tree--> raytree.rs: RayTree --> JSON
-//!                                        '--> witness.rs: witness camera render + overlay -> PNG
+//! one pixel again --render::trace_ray_tree--> raytree.rs: RayTree --> JSON
+//!                                        '--> witness/: witness camera render + overlay -> PNG
 //! stats.rs: RayCounts (filled by the tracers) + phase times -> --stats; progress.rs: the bar
 //! ```
 //!
-//! `main.rs` is a thin wrapper around [`cli::run`]; [`bench`] is `whitted bench`, the throughput
-//! benchmark shared with the Embree harness.
+//! # Dependencies between modules
+//!
+//! A module imports only from the lines above its own and from names before it on its line,
+//! never back up (`tests/module_graph.rs` walks the `crate::` paths of `src/` and fails on any
+//! cycle):
+//!
+//! ```text
+//! leaves       error, math, simd (the only file naming `wide`), progress
+//! data         packet (8-ray SoA), scene (parsed tree, cameras, textures)
+//! kernels      intersect (Hit and the primitive tests), bvh (knows no primitive)
+//! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH)
+//! tracers      reference (recursive), wavefront (queues and packets)
+//! front door   render (threads, picks a tracer), output (files), witness (ray-tree picture)
+//! commands     bench, cli (main.rs calls cli::run)
+//! ```
+//!
+//! The public API is [`Scene`], [`render()`](render::render), [`RenderOptions`], [`Frame`],
+//! [`output`], [`raytree`] and [`Error`]. The other modules are public only so that the
+//! benchmarks, fuzz targets and tests can reach the kernels; they are hidden from the docs and
+//! not a stable interface. `main.rs` is a thin wrapper around `cli::run`.
 
+#[doc(hidden)]
 pub mod bench;
+#[doc(hidden)]
 pub mod bvh;
+#[doc(hidden)]
 pub mod cli;
 pub mod error;
 pub mod frame;
+#[doc(hidden)]
 pub mod geometry;
+#[doc(hidden)]
 pub mod intersect;
 pub mod math;
 pub mod options;
 pub mod output;
+#[doc(hidden)]
 pub mod packet;
+#[doc(hidden)]
 pub mod progress;
 pub mod raytree;
+#[doc(hidden)]
 pub mod reference;
 pub mod render;
 pub mod scene;
+#[doc(hidden)]
 pub mod shade;
+#[doc(hidden)]
 pub mod simd;
 pub mod stats;
+#[doc(hidden)]
 pub mod wavefront;
+#[doc(hidden)]
 pub mod witness;
 
 pub use error::{Error, Result};
@@ -49,6 +109,7 @@ pub use frame::Frame;
 pub use options::{RenderOptions, Tracer};
 pub use render::render;
 pub use scene::Scene;
+pub use shade::ShadeOptions;
 
 /// True when this CPU (and OS) run what the build was compiled for: x86-64-v3's AVX, AVX2,
 /// FMA, BMI1 and BMI2. It asks CPUID itself: `is_x86_feature_detected!` answers "yes" at compile
