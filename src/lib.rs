@@ -87,8 +87,7 @@ pub mod options;
 pub mod output;
 #[doc(hidden)]
 pub mod packet;
-#[doc(hidden)]
-pub mod progress;
+pub(crate) mod progress;
 pub mod raytree;
 #[doc(hidden)]
 pub mod reference;

@@ -10,19 +10,10 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
 
-use common::{listing, scratch_dir};
+use common::{CAMERA, SPHERE, in_group, listing, scratch_dir};
 
-const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
-const MATERIALS: &str = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }\n";
-const SPHERE: &str = "Sphere { center 0 0 0 radius 1 }";
 const CUBE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-
-/// A scene: camera on line 1, materials on line 2, `Group {` on line 3, `body` from line 4.
-fn in_group(body: &str) -> String {
-    format!("{CAMERA}{MATERIALS}Group {{ numObjects 1\n{body}\n}}\n")
-}
 
 /// A scene whose group holds one mesh loaded from `mesh.obj`, named on line 4 column 25.
 fn with_mesh() -> String {
@@ -37,42 +28,24 @@ fn check_in(name: &str, files: &[(&str, &[u8])], scene: &str, at: &str) {
     for (file, bytes) in files {
         std::fs::write(dir.join(file), bytes).unwrap();
     }
-    let before = listing(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args(["render", scene, "-o", "out.png", "--size", "8", "8"])
-        .current_dir(&dir)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(2),
-        "{name}: expected exit code 2; stderr:\n{stderr}"
-    );
-    assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
-    let lines: Vec<&str> = stderr.lines().collect();
-    assert_eq!(
-        lines.len(),
-        1,
-        "{name}: expected one line on stderr:\n{stderr}"
-    );
+    check_scene_in(name, &dir, scene, at);
+}
+
+/// Runs `whitted render SCENE -o out.png` in `dir` (already filled) and checks the claim.
+fn check_scene_in(name: &str, dir: &Path, scene: &str, at: &str) {
+    let before = listing(dir);
+    let out = common::whitted(dir, &["render", scene, "-o", "out.png", "--size", "8", "8"]);
+    let msg = out.assert_error(at);
     assert!(
-        stderr.ends_with('\n'),
+        out.stderr.ends_with('\n'),
         "{name}: the line must end with a newline"
     );
-    let msg = lines[0]
-        .strip_prefix("error: ")
-        .unwrap_or_else(|| panic!("{name}: expected `error: ...`, found {stderr}"));
     assert!(
-        msg.starts_with(at),
-        "{name}: expected the message to start with `{at}`, found `{msg}`"
-    );
-    assert!(
-        positioned(msg) || msg.contains(": cannot "),
+        positioned(&msg) || msg.contains(": cannot "),
         "{name}: expected `path:line:col: ...` or `path: cannot ...`, found `{msg}`"
     );
     assert_eq!(
-        listing(&dir),
+        listing(dir),
         before,
         "{name}: the folder changed (an output or temporary file was left)"
     );
@@ -480,24 +453,9 @@ fn a_mesh_too_large_for_memory_is_an_error_not_an_abort() {
     );
 }
 
-/// `check_in` on a folder the caller has already filled.
+/// `check_in` on a folder the caller has already filled, with the scene `bad.txt`.
 fn check_existing(name: &str, dir: &Path, at: &str) {
-    let before = listing(dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args(["render", "bad.txt", "-o", "out.png", "--size", "8", "8"])
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{name}: stderr:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "{name}: panicked:\n{stderr}");
-    assert_eq!(stderr.lines().count(), 1, "{name}: stderr:\n{stderr}");
-    let msg = stderr.trim_end().strip_prefix("error: ").unwrap_or("");
-    assert!(
-        msg.starts_with(at),
-        "{name}: expected `{at}...`, found `{msg}`"
-    );
-    assert_eq!(listing(dir), before, "{name}: the folder changed");
+    check_scene_in(name, dir, "bad.txt", at);
 }
 
 #[test]

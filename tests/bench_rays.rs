@@ -6,8 +6,9 @@
 //! well-formed; bad arguments are usage errors. Runs at 64 x 64 with `--reps 1`; nothing here
 //! looks at times.
 
+mod common;
+
 use std::collections::BTreeMap;
-use std::process::Command;
 use std::sync::OnceLock;
 
 use whitted::bench::{BenchScene, generate_camera_rays, generate_secondary_rays};
@@ -69,11 +70,9 @@ fn csv_rows(stdout: &str) -> Vec<Row> {
         .collect()
 }
 
-fn whitted(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args(args)
-        .output()
-        .unwrap()
+/// Runs the binary in the package folder.
+fn whitted(args: &[&str]) -> common::Run {
+    common::whitted(std::path::Path::new(env!("CARGO_MANIFEST_DIR")), args)
 }
 
 /// The rows of `whitted bench --scene NAME --width 64 --height 64 --reps 1 --threads N`.
@@ -91,12 +90,13 @@ fn bench_rows(scene: &str, threads: &str) -> Vec<Row> {
         "--threads",
         threads,
     ]);
-    assert!(
-        out.status.success(),
+    assert_eq!(
+        out.code,
+        Some(0),
         "whitted bench --scene {scene} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+        out.stderr
     );
-    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stdout = out.stdout;
     assert!(
         stdout.lines().any(|l| l.starts_with("# peak memory")),
         "no peak memory line:\n{stdout}"
@@ -268,9 +268,7 @@ fn bad_arguments_are_usage_errors() {
         &["bench", "--scene"],
     ] {
         let out = whitted(args);
-        assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(stderr.starts_with("error: "), "{args:?}: {stderr}");
+        out.assert_error("");
         assert!(out.stdout.is_empty(), "{args:?}");
     }
 }

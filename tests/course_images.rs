@@ -13,7 +13,6 @@ mod common;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use common::{course_dir, diff, read_image, scratch_dir};
 
@@ -64,16 +63,14 @@ fn linked_folder(assignment_dir: &Path, name: &str) -> PathBuf {
 }
 
 fn run(dir: &Path, args: &[String]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let out = common::whitted(dir, &args);
+    assert_eq!(
+        out.code,
+        Some(0),
         "whitted {} failed: {}",
         args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
+        out.stderr
     );
 }
 

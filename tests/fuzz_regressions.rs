@@ -1,8 +1,10 @@
 //! Claim: every input that crashed one of the fuzz targets in `fuzz/` (or would have: some were
 //! found in review first) now goes through that target's checks cleanly. Each case is the
-//! minimised input, run through the same calls and assertions as its target: parse without
-//! panicking; returned triangles are finite; an 8x8 render with shadows and 3 bounces, plain
-//! and with every option, has only finite pixels.
+//! minimised input, run through the same calls and assertions as its target, and must take the
+//! path it crashed on: an input that crashed a parser is refused with a positioned error, not a
+//! panic; an input that crashed a render parses (else the test would check nothing), and an
+//! 8x8 render with shadows and 3 bounces, plain and with every option, with both tracers, has
+//! only finite pixels.
 //!
 //! What belongs here: one test per crash, named by what it was, with the input inline.
 
@@ -15,20 +17,21 @@ use whitted::options::check_options;
 use whitted::reference::render_reference;
 use whitted::shade::ShadeOptions;
 
-/// The `parse_obj` target.
-fn parse_obj_target(text: &str) {
-    if let Ok(triangles) = whitted::scene::obj::parse_obj(text, Path::new("fuzz.obj")) {
-        assert!(!triangles.is_empty());
-        assert!(triangles.iter().flatten().all(|v| v.is_finite()));
+/// The `parse_obj` target's checks, for an input that must be refused: an error, no panic.
+/// Returns the message.
+fn parse_obj_refused(text: &str) -> String {
+    match whitted::scene::obj::parse_obj(text, Path::new("fuzz.obj")) {
+        Ok(triangles) => panic!("expected an error, parsed {} triangles", triangles.len()),
+        Err(e) => e.to_string(),
     }
 }
 
 /// The `render_tiny` target (which includes everything `parse_scene` checks).
 fn render_tiny_target(text: &str) {
     let path = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/fuzz.txt"));
-    let Ok(scene) = whitted::scene::parse::parse_str(text, path) else {
-        return;
-    };
+    // A regression input that stopped parsing would check nothing: it must parse.
+    let scene = whitted::scene::parse::parse_str(text, path)
+        .unwrap_or_else(|e| panic!("the regression input must parse: {e}\n{text}"));
     let plain = ShadeOptions {
         shadows: true,
         bounces: 3,
@@ -61,7 +64,8 @@ fn render_tiny_target(text: &str) {
 fn obj_index_i64_min_overflowed_when_negated() {
     // Found in review: `-i` on i64::MIN panics with overflow checks, and without them wraps to
     // a negative index that passes the range test and indexes out of bounds.
-    parse_obj_target("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n");
+    let msg = parse_obj_refused("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9223372036854775808\n");
+    assert!(msg.starts_with("fuzz.obj:4:"), "{msg}");
 }
 
 #[test]

@@ -123,5 +123,8 @@ fn no_module_imports_a_module_that_imports_it_back() {
             }
         }
     }
-    assert!(edges.len() > 10, "the scan found too few imports: {edges:?}");
+    assert!(
+        edges.len() > 10,
+        "the scan found too few imports: {edges:?}"
+    );
 }

@@ -7,12 +7,12 @@
 //! line 3 and its body starts on line 4. Messages of the CLI as a whole (exit code, one line
 //! on stderr, no file written) belong in `bad_input.rs`.
 
+mod common;
+
 use std::path::Path;
 
+use common::{CAMERA, SPHERE, in_group};
 use whitted::scene::parse::parse_str;
-
-const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
-const MATERIALS: &str = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }\n";
 
 /// The message `text` fails with.
 fn error(text: &str) -> String {
@@ -22,17 +22,10 @@ fn error(text: &str) -> String {
     }
 }
 
-/// A scene whose group (opening on line 3) holds `body`, starting on line 4.
-fn in_group(body: &str) -> String {
-    format!("{CAMERA}{MATERIALS}Group {{ numObjects 1\n{body}\n}}\n")
-}
-
 /// A scene with `block` on line 2, after the camera.
 fn after_camera(block: &str) -> String {
     format!("{CAMERA}{block}\n")
 }
-
-const SPHERE: &str = "Sphere { center 0 0 0 radius 1 }";
 
 #[test]
 fn empty_file() {

@@ -1,4 +1,5 @@
-//! Claim: no NaN or infinite value ever reaches a pixel. Every render here asserts that each
+//! Claim: no NaN or infinite value ever reaches a pixel. Every render here, with both tracers,
+//! asserts that each
 //! pixel's colour (and depth and normal where the primary ray hit) is finite, under every
 //! combination of shading options, for our scenes and for the rays numerics break on first:
 //! grazing rays on spheres, rays exactly along a triangle edge or through a vertex, rays
@@ -16,7 +17,7 @@ use common::assert_finite;
 use whitted::intersect::{intersect_plane, intersect_sphere, intersect_triangle};
 use whitted::math::{Ray, Vec3};
 use whitted::shade::ShadeOptions;
-use whitted::{Frame, RenderOptions, render};
+use whitted::{Frame, RenderOptions, Tracer, render};
 use whitted::{Scene, scene::parse::parse_str};
 
 /// The shading options every scene is rendered under: the defaults, and everything on.
@@ -38,24 +39,26 @@ fn option_sets() -> [ShadeOptions; 3] {
     [plain, shadows, everything]
 }
 
-/// Renders `scene` at `width` x `height` under every option set, asserting finite pixels;
-/// returns the frames.
+/// Renders `scene` at `width` x `height` under every option set with both tracers, asserting
+/// finite pixels; returns the frames (reference then packet, per option set).
 fn render_all(scene: &Scene, width: u32, height: u32, what: &str) -> Vec<Frame> {
-    option_sets()
-        .into_iter()
-        .map(|shade| {
+    let mut frames = Vec::new();
+    for shade in option_sets() {
+        for tracer in [Tracer::Reference, Tracer::Packet] {
             let opts = RenderOptions {
                 width,
                 height,
                 shade,
+                tracer,
                 threads: 1,
                 ..RenderOptions::default()
             };
             let frame = render(scene, &opts).unwrap();
-            assert_finite(&frame, &format!("{what} with {shade:?}"));
-            frame
-        })
-        .collect()
+            assert_finite(&frame, &format!("{what} with {tracer:?} and {shade:?}"));
+            frames.push(frame);
+        }
+    }
+    frames
 }
 
 fn scene(text: &str) -> Scene {

@@ -1,7 +1,8 @@
 //! Claim: the ray tree of one pixel is complete and well formed. A glass-sphere pixel's tree
 //! has all four kinds of segments (eye, shadow, reflected, transmitted), a pure mirror pixel's
-//! has eye, shadow and reflected ones, and a mirror pixel that reflects glass has all four; every child starts where its parent ends; the tree is
-//! the same every time; [`RayTree::canonical`] makes any recording order compare equal (as
+//! has eye, shadow and reflected ones, and a mirror pixel that reflects glass has all four;
+//! every child starts where its parent ends; the tree traced again is that of the rendered
+//! pixel (same colour, both tracers); [`RayTree::canonical`] makes any recording order compare equal (as
 //! the packet tracer's bounce-by-bounce order must); the JSON parses and holds every segment;
 //! the witness picture shows every kind of segment the tree has, in its course colour; and
 //! the CLI writes the JSON and a witness PNG of the requested size, refusing pixels outside
@@ -10,12 +11,11 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-use whitted::RenderOptions;
 use whitted::raytree::{EndKind, RayTree, SegmentKind, TreeSource};
 use whitted::render::trace_ray_tree;
 use whitted::scene::Scene;
+use whitted::{RenderOptions, Tracer};
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -132,9 +132,21 @@ fn every_child_starts_where_its_parent_ends() {
 }
 
 #[test]
-fn the_same_tree_comes_out_twice() {
-    for pixel in [GLASS, MIRROR] {
-        assert_eq!(tree_of(pixel), tree_of(pixel));
+fn the_tree_is_traced_for_the_pixel_the_render_made() {
+    // The tree is traced again after the render: its colour must be that pixel's colour, with
+    // either tracer (a wrong pixel, camera or option set would show here).
+    for (name, x, y) in [GLASS, MIRROR, MIRROR_SEES_GLASS] {
+        let scene = Scene::load(&scene_path(name)).unwrap();
+        for tracer in [Tracer::Reference, Tracer::Packet] {
+            let opts = RenderOptions {
+                tracer,
+                ..options()
+            };
+            let frame = whitted::render(&scene, &opts).unwrap();
+            let (_, color) = trace_ray_tree(&scene, &opts, x, y).unwrap();
+            let pixel = frame.color[(y * opts.width + x) as usize];
+            assert_eq!(color, pixel, "{name} ({x}, {y}) with {tracer:?}");
+        }
     }
 }
 
@@ -238,20 +250,33 @@ fn the_json_parses_and_holds_every_segment() {
     }
 }
 
-fn whitted() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_whitted"))
+/// Runs the binary in `dir`, with `scene` (one of ours) standing for `SCENE` in `args`.
+fn run_in(dir: &Path, scene: &str, args: &[&str]) -> common::Run {
+    let scene = scene_path(scene);
+    let args: Vec<&str> = args
+        .iter()
+        .map(|a| {
+            if *a == "SCENE" {
+                scene.to_str().unwrap()
+            } else {
+                a
+            }
+        })
+        .collect();
+    common::whitted(dir, &args)
 }
 
 #[test]
 fn the_cli_writes_the_tree_and_a_witness_png_of_the_requested_size() {
     let dir = common::scratch_dir("ray_tree_cli");
-    let (json, png, image) = (dir.join("t.json"), dir.join("t.png"), dir.join("i.png"));
-    let out = whitted()
-        .arg("render")
-        .arg(scene_path("glass_sphere.txt"))
-        .args(["-o"])
-        .arg(&image)
-        .args([
+    let out = run_in(
+        &dir,
+        "glass_sphere.txt",
+        &[
+            "render",
+            "SCENE",
+            "-o",
+            "i.png",
             "--size",
             "160",
             "120",
@@ -259,32 +284,29 @@ fn the_cli_writes_the_tree_and_a_witness_png_of_the_requested_size() {
             "--shade-back",
             "--bounces",
             "5",
-        ])
-        .args(["--ray-tree", "92", "60"])
-        .arg(&json)
-        .arg("--ray-tree-image")
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+            "--ray-tree",
+            "92",
+            "60",
+            "t.json",
+            "--ray-tree-image",
+            "t.png",
+        ],
     );
+    assert_eq!(out.code, Some(0), "{}", out.stderr);
     assert!(
         out.stderr.is_empty(),
         "nothing on piped stderr: {:?}",
-        String::from_utf8_lossy(&out.stderr)
+        out.stderr
     );
-    let picture = whitted::output::read_png(&png).unwrap();
+    let picture = whitted::output::read_png(&dir.join("t.png")).unwrap();
     assert_eq!((picture.width, picture.height), (160, 120));
-    let main = whitted::output::read_png(&image).unwrap();
+    let main = whitted::output::read_png(&dir.join("i.png")).unwrap();
     assert_ne!(
         picture.data, main.data,
         "the witness sees the scene from elsewhere"
     );
     let tree: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("t.json")).unwrap()).unwrap();
     assert_eq!(tree["image_size"], serde_json::json!([160, 120]));
     let kinds: Vec<&str> = tree["segments"]
         .as_array()
@@ -300,10 +322,12 @@ fn the_cli_writes_the_tree_and_a_witness_png_of_the_requested_size() {
 #[test]
 fn the_course_spelling_and_an_explicit_witness_camera_work_too() {
     let dir = common::scratch_dir("ray_tree_course");
-    let out = whitted()
-        .arg("-input")
-        .arg(scene_path("facing_mirrors.txt"))
-        .args([
+    let out = run_in(
+        &dir,
+        "facing_mirrors.txt",
+        &[
+            "-input",
+            "SCENE",
             "-size",
             "90",
             "60",
@@ -313,11 +337,9 @@ fn the_course_spelling_and_an_explicit_witness_camera_work_too() {
             "-ray_tree",
             "10",
             "40",
-        ])
-        .arg(dir.join("m.json"))
-        .arg("-ray_tree_image")
-        .arg(dir.join("m.png"))
-        .args([
+            "m.json",
+            "-ray_tree_image",
+            "m.png",
             "-witness_camera",
             "0",
             "5",
@@ -327,14 +349,9 @@ fn the_course_spelling_and_an_explicit_witness_camera_work_too() {
             "0",
             "-witness_angle",
             "70",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
     );
+    assert_eq!(out.code, Some(0), "{}", out.stderr);
     let picture = whitted::output::read_png(&dir.join("m.png")).unwrap();
     assert_eq!((picture.width, picture.height), (90, 60));
 }
@@ -343,32 +360,32 @@ fn the_course_spelling_and_an_explicit_witness_camera_work_too() {
 fn a_pixel_outside_the_image_is_a_usage_error() {
     let dir = common::scratch_dir("ray_tree_outside");
     for (x, y) in [("400", "0"), ("0", "300"), ("-1", "0")] {
-        let out = whitted()
-            .arg("render")
-            .arg(scene_path("glass_sphere.txt"))
-            .args(["--size", "400", "300", "--ray-tree", x, y])
-            .arg(dir.join("t.json"))
-            .output()
-            .unwrap();
-        assert_eq!(out.status.code(), Some(2));
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.starts_with("error: option --ray-tree"), "{err}");
+        let args = [
+            "render",
+            "SCENE",
+            "--size",
+            "400",
+            "300",
+            "--ray-tree",
+            x,
+            y,
+            "t.json",
+        ];
+        run_in(&dir, "glass_sphere.txt", &args).assert_error("option --ray-tree");
         assert!(!dir.join("t.json").exists());
     }
-    let out = whitted()
-        .arg("render")
-        .arg(scene_path("glass_sphere.txt"))
-        .arg("--ray-tree-image")
-        .arg(dir.join("t.png"))
-        .args(["-o"])
-        .arg(dir.join("i.png"))
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("needs --ray-tree"));
+    let args = [
+        "render",
+        "SCENE",
+        "--ray-tree-image",
+        "t.png",
+        "-o",
+        "i.png",
+    ];
+    let msg = run_in(&dir, "glass_sphere.txt", &args).assert_error("option --ray-tree-image");
+    assert!(msg.contains("needs --ray-tree"), "{msg}");
 }
 
-/// Pixels of exactly `color` (display space, rounded as the drawing does).
 fn count_color(img: &whitted::output::Rgb8, color: [f32; 3]) -> usize {
     let want = color.map(|c| (c * 255.0 + 0.5) as u8);
     img.data.chunks_exact(3).filter(|p| **p == want).count()

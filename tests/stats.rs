@@ -1,24 +1,23 @@
 //! Claim: `--stats` prints a readable block and exactly one `stats: key=value ...` line on
 //! stderr, with ray counts by kind and bounce that add up (and match the reference tracer's
-//! own count); without a terminal on stderr no progress bar is drawn. Never asserts on time.
+//! own count); a render that runs past the bar's delay draws a progress bar when stderr is a
+//! terminal and nothing when it is not. Never asserts on time: renders grow until one lasts
+//! long enough for the bar to be due.
 
 mod common;
 
 use std::collections::HashMap;
 use std::path::Path;
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 use whitted::raytree::SegmentKind;
 use whitted::scene::Scene;
 use whitted::{RenderOptions, render};
 
 fn run(args: &[&str]) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .unwrap();
-    (out.status.success(), String::from_utf8(out.stderr).unwrap())
+    let out = common::whitted(Path::new(env!("CARGO_MANIFEST_DIR")), args);
+    (out.code == Some(0), out.stderr)
 }
 
 #[test]
@@ -127,23 +126,69 @@ fn ray_counts_do_not_depend_on_the_thread_count() {
     assert!(one.by_bounce.len() > 2, "mirrors bounce: {one:?}");
 }
 
+/// The bar appears once a render has run for a second (`SHOW_AFTER` in `src/progress.rs`); the
+/// renders below run at least twice as long.
+const BAR_DUE: Duration = Duration::from_secs(2);
+
+/// Renders the glass sphere with the reference tracer, larger and larger, until one run lasts
+/// [`BAR_DUE`]; returns what that run wrote to stderr. With `terminal`, stderr is a
+/// pseudo-terminal (`script` from util-linux) and what it received comes back instead.
+fn long_render_stderr(terminal: bool, name: &str) -> String {
+    let dir = common::scratch_dir(name);
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glass_sphere.txt");
+    let out = dir.join("g.png");
+    let (mut w, mut h) = (400u32, 300u32);
+    loop {
+        let (w_s, h_s) = (w.to_string(), h.to_string());
+        let args = [
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            &w_s,
+            &h_s,
+            "--shadows",
+            "--shade-back",
+            "--tracer",
+            "reference",
+        ];
+        let start = Instant::now();
+        let stderr = if terminal {
+            let line: Vec<String> = std::iter::once(env!("CARGO_BIN_EXE_whitted"))
+                .chain(args)
+                .map(|a| format!("'{a}'"))
+                .collect();
+            let run = Command::new("script")
+                .args(["-qec", &line.join(" "), "/dev/null"])
+                .output()
+                .expect("`script` (util-linux) runs");
+            assert!(run.status.success(), "{:?}", run);
+            String::from_utf8_lossy(&run.stdout).into_owned()
+        } else {
+            let (ok, err) = run(&args);
+            assert!(ok, "{err}");
+            err
+        };
+        if start.elapsed() >= BAR_DUE {
+            return stderr;
+        }
+        assert!(
+            w < 12800,
+            "a {w}x{h} render still ended before the bar was due"
+        );
+        (w, h) = (w * 2, h * 2);
+    }
+}
+
+#[test]
+fn a_progress_bar_is_drawn_when_stderr_is_a_terminal() {
+    let seen = long_render_stderr(true, "stats_progress_tty");
+    assert!(seen.contains(" rows, "), "no bar on the terminal: {seen:?}");
+}
+
 #[test]
 fn no_progress_bar_is_drawn_when_stderr_is_not_a_terminal() {
-    let dir = common::scratch_dir("stats_no_progress");
-    let out = dir.join("g.png");
-    // Big enough to pass the bar's one-second delay on a slow machine (the claim holds either
-    // way: nothing may be drawn).
-    let (ok, err) = run(&[
-        "render",
-        "scenes/glass_sphere.txt",
-        "-o",
-        out.to_str().unwrap(),
-        "--size",
-        "800",
-        "600",
-        "--shadows",
-        "--shade-back",
-    ]);
-    assert!(ok, "{err}");
+    let err = long_render_stderr(false, "stats_no_progress");
     assert!(err.is_empty(), "stderr should be empty: {err:?}");
 }

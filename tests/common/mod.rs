@@ -299,3 +299,16 @@ pub fn copy_scene(name: &str, dir: &Path) -> PathBuf {
     std::fs::copy(scenes.join(name), &to).unwrap();
     to
 }
+
+/// A valid camera line for scenes built in tests (line 1 of [`in_group`]).
+pub const CAMERA: &str = "OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }\n";
+/// A valid one-material block (line 2 of [`in_group`]).
+pub const MATERIALS: &str = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }\n";
+/// A unit sphere at the origin.
+pub const SPHERE: &str = "Sphere { center 0 0 0 radius 1 }";
+
+/// A scene: camera on line 1, materials on line 2, `Group {` on line 3, `body` from line 4 (so
+/// errors in `body` have known positions).
+pub fn in_group(body: &str) -> String {
+    format!("{CAMERA}{MATERIALS}Group {{ numObjects 1\n{body}\n}}\n")
+}
