@@ -11,6 +11,7 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use crate::bench::{self, BenchOptions, BenchScene};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
 use crate::options::{self, RenderOptions, Tracer};
@@ -89,6 +90,25 @@ COURSE OPTIONS (single dash, as in the handouts): -input -output -size -depth -n
 EXIT CODES: 0 success, 2 any error (one line on stderr: `error: path:line:col: expected ...`).
 ";
 
+/// The text of `whitted bench --help`.
+pub const BENCH_HELP: &str = "\
+whitted bench: ray throughput on the four procedural scenes of shared/bench/SCENES.md
+
+USAGE:
+    whitted bench [--scene NAME|all] [--threads N] [--reps N] [--width W] [--height H]
+
+OPTIONS (defaults in brackets):
+    --scene NAME|all    spheres64, spheres4096, torus100k, torus1m or all [all]
+    --threads N         worker threads tracing the rays; 0 means all cores [1]
+    --reps N            repetitions; each figure is the best of them [3]
+    --width W           image width, a multiple of 4 [1024]
+    --height H          image height, a multiple of 2 [1024]
+
+Prints `CSV,<scene>,<kernel>,<rays>,<hits>,<ms>,<Mrays/s>` per kernel (primary, shadow, mirror,
+diffuse: 8-ray packets; the same with `_scalar`: one ray at a time) and
+`CSV,<scene>,build_1t_ms,<primitives>,0,<ms>,<Mprims/s>` for the BVH build on one thread.
+";
+
 /// Everything the command line asks for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Command {
@@ -128,7 +148,13 @@ pub fn run(args: Vec<OsString>) -> Result<()> {
             Ok(())
         }
         Some("render") => execute(parse_args(&args[1..], true)?),
-        Some("bench") => crate::bench::run(&args[1..]),
+        Some("bench") => match parse_bench_args(&args[1..])? {
+            Some(opts) => bench::run(&opts),
+            None => {
+                print!("{BENCH_HELP}");
+                Ok(())
+            }
+        },
         Some(a) if a.starts_with('-') => execute(parse_args(&args, false)?),
         Some(other) => Err(Error::Usage(format!(
             "unknown command `{other}`: expected `render`, `bench` or course options like -input"
@@ -136,12 +162,14 @@ pub fn run(args: Vec<OsString>) -> Result<()> {
     }
 }
 
-fn number<T: std::str::FromStr>(option: &str, value: Option<&String>, what: &str) -> Result<T> {
-    let Some(v) = value else {
-        return Err(Error::Usage(format!(
-            "option {option}: expected {what}, found nothing"
-        )));
-    };
+fn value<'a>(option: &str, value: Option<&'a String>, what: &str) -> Result<&'a str> {
+    value
+        .map(String::as_str)
+        .ok_or_else(|| Error::Usage(format!("option {option}: expected {what}, found nothing")))
+}
+
+fn number<T: std::str::FromStr>(option: &str, v: Option<&String>, what: &str) -> Result<T> {
+    let v = value(option, v, what)?;
     v.parse::<T>()
         .map_err(|_| Error::Usage(format!("option {option}: expected {what}, found `{v}`")))
 }
@@ -328,6 +356,46 @@ pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
             .map_err(|e| Error::Usage(format!("option --ray-tree: {}", usage_text(e))))?;
     }
     Ok(cmd)
+}
+
+/// Parses the arguments after `bench`; `None` asks for the help text.
+pub fn parse_bench_args(args: &[String]) -> Result<Option<BenchOptions>> {
+    let mut opts = BenchOptions::default();
+    let mut it = args.iter();
+    while let Some(arg) = it.next() {
+        let opt = arg.as_str();
+        match opt {
+            "-h" | "--help" | "-help" => return Ok(None),
+            "--scene" => {
+                let v = value(opt, it.next(), "a scene name or `all`")?;
+                opts.scenes = if v == "all" {
+                    BenchScene::ALL.to_vec()
+                } else {
+                    vec![BenchScene::from_name(v).ok_or_else(|| {
+                        Error::Usage(format!(
+                            "option --scene: expected one of spheres64, spheres4096, \
+                             torus100k, torus1m or all, found `{v}`"
+                        ))
+                    })?]
+                };
+            }
+            "--threads" => opts.threads = number(opt, it.next(), "a thread count")?,
+            "--reps" => {
+                opts.reps = number(opt, it.next(), "a repetition count")?;
+                if !(1..=1000).contains(&opts.reps) {
+                    return Err(Error::Usage(format!(
+                        "option --reps: expected 1 to 1000 repetitions, found {}",
+                        opts.reps
+                    )));
+                }
+            }
+            "--width" => opts.width = number(opt, it.next(), "a width in pixels")?,
+            "--height" => opts.height = number(opt, it.next(), "a height in pixels")?,
+            _ => return Err(Error::Usage(format!("bench: unknown option `{arg}`"))),
+        }
+    }
+    bench::check_size(opts.width, opts.height)?;
+    Ok(Some(opts))
 }
 
 /// The message of a usage error without the `--help` hint (it is added once, outside).
