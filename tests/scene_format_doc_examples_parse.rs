@@ -1,7 +1,7 @@
 //! Claim: every example of `docs/scene-format.md` parses, every keyword of the format appears in
 //! one of them, and the examples mean what the text beside them says (the plane's offset, the
-//! order of transforms, the material carried across groups, the default material, the mesh path
-//! resolved beside the scene file).
+//! order of transforms, the direction of rotations, how `Matrix` is read, the material carried
+//! across groups, the default material, the mesh path resolved beside the scene file).
 //!
 //! Examples are the fenced blocks whose info string starts with `scene`: `scene` is a complete
 //! file; `scene-top` holds top-level blocks, completed with a camera and an empty group if it has
@@ -257,6 +257,18 @@ fn the_transform_written_last_applies_first() {
     assert_eq!(transformed(&scene, Vec3::ZERO), Vec3::new(2.0, 0.0, 0.0));
     assert_eq!(transformed(&scene, Vec3::X), Vec3::new(4.0, 0.0, 0.0));
     assert_eq!(transformed(&scene, -Vec3::X), Vec3::new(0.0, 0.0, 0.0));
+}
+
+#[test]
+fn rotations_are_right_handed_and_matrices_read_row_by_row() {
+    let scene = labelled("z-rotate-90");
+    let p = transformed(&scene, Vec3::X);
+    assert!(
+        (p - Vec3::Y).length() < 1e-6,
+        "ZRotate 90 took (1 0 0) to {p}"
+    );
+    let scene = labelled("matrix-row-by-row");
+    assert_eq!(transformed(&scene, Vec3::ZERO), Vec3::new(5.0, 6.0, 7.0));
 }
 
 #[test]
