@@ -1,19 +1,24 @@
 //! The scene as the course's file describes it: a camera, lights, a background, a material table
 //! and a tree of objects (groups, transforms and primitives). [`Scene::load`] parses a file
-//! (see [`parse`] for the grammar); the reference tracer walks the tree as it is, the packet
-//! tracer flattens it into world-space SoA arrays first.
+//! (see [`parse`] for the grammar, `docs/scene-format.md` for users); the reference tracer walks
+//! the tree as it is, the packet tracer flattens it into world-space SoA arrays first.
 //!
 //! ```text
-//! parse(text) -> Scene { camera, lights, materials, root: Object tree }
+//! file --input--> text --token--> tokens --cursor--> parse (+ blocks, obj) --passes-->
+//!      Scene { camera, lights, materials, root: Object tree }
 //!                  |-> reference tracer (recursive, walks the tree)
 //!                  '-> flatten -> SoA primitives -> packet tracer
 //! ```
 
+mod blocks;
 pub mod camera;
+mod cursor;
 mod input;
 pub mod obj;
 pub mod parse;
+mod passes;
 pub mod texture;
+mod token;
 
 use std::path::Path;
 
