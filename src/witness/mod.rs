@@ -143,15 +143,9 @@ impl Canvas<'_> {
         }
     }
 
-    /// Draws the 2D segment `a`-`b` (depths `za`, `zb`, or `None` for no hidden test).
-    fn line(
-        &mut self,
-        view: &View,
-        a: [f32; 2],
-        b: [f32; 2],
-        depths: Option<(f32, f32)>,
-        pen: Pen,
-    ) {
+    /// Draws the 2D segment `a`-`b`; with `depths` `(view, za, zb)`, the parts behind the
+    /// witness frame's surfaces (as `view` projects them) fainter, with `None` no hidden test.
+    fn line(&mut self, a: [f32; 2], b: [f32; 2], depths: Option<(&View, f32, f32)>, pen: Pen) {
         let hw = pen.width * 0.5;
         let pad = hw + 2.0;
         let Some((t0, t1)) = clip_to_rect(
@@ -214,7 +208,7 @@ impl Canvas<'_> {
                     continue;
                 }
                 let mut alpha = pen.alpha * cover;
-                if let Some((za, zb)) = depths {
+                if let Some((view, za, zb)) = depths {
                     let z = 1.0 / ((1.0 - t) / za + t / zb);
                     let surface =
                         self.frame.depth[y * self.width + x] / view.ray_length(px[0], px[1]);
@@ -236,8 +230,8 @@ impl Canvas<'_> {
                 alpha: 0.55 * pen.alpha,
                 ..pen
             };
-            self.line(view, pa, pb, Some((za, zb)), halo);
-            self.line(view, pa, pb, Some((za, zb)), pen);
+            self.line(pa, pb, Some((view, za, zb)), halo);
+            self.line(pa, pb, Some((view, za, zb)), pen);
         }
     }
 
@@ -418,7 +412,6 @@ pub fn draw_ray_tree(
                     ([p[0] - r, p[1] + r], [p[0] + r, p[1] - r]),
                 ] {
                     canvas.line(
-                        &view,
                         a,
                         b,
                         None,
@@ -428,7 +421,7 @@ pub fn draw_ray_tree(
                             ..pen
                         },
                     );
-                    canvas.line(&view, a, b, None, pen);
+                    canvas.line(a, b, None, pen);
                 }
             }
             EndKind::Escape | EndKind::DistantLight => {}
@@ -599,20 +592,9 @@ fn draw_legend(canvas: &mut Canvas, title: &str, unit: f32, drawn: &[[f32; 2]]) 
                 alpha: 1.0,
                 dash: dashed.then_some((5.0 * s as f32, 3.0 * s as f32)),
             };
-            let dummy = View {
-                center: Vec3::ZERO,
-                forward: Vec3::Z,
-                right: Vec3::X,
-                up: Vec3::Y,
-                tan_half: 1.0,
-                width: 1.0,
-                height: 1.0,
-                side: 1.0,
-                near: 0.0,
-            };
             let a = [(x0 + pad) as f32, mid as f32 + 0.5];
             let b = [(x0 + pad + swatch) as f32, mid as f32 + 0.5];
-            canvas.line(&dummy, a, b, None, pen);
+            canvas.line(a, b, None, pen);
         }
         canvas.text(x0 + 2 * pad + swatch, y, s, label, [1.0; 3]);
     }
