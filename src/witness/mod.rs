@@ -26,6 +26,7 @@
 
 mod font;
 mod placement;
+mod projection;
 
 pub use self::placement::{
     DEFAULT_ANGLE_DEG, DEFAULT_PITCH_DEG, DEFAULT_YAW_DEG, ESCAPE_LOOK_AT, WitnessPlace,
@@ -33,87 +34,12 @@ pub use self::placement::{
 };
 
 use self::font::{descends, glyph};
+use self::projection::View;
 use crate::frame::Frame;
 use crate::math::Vec3;
 use crate::output::{Rgb8, color_image};
 use crate::raytree::{EndKind, RayTree, SegmentKind};
 use crate::scene::{Camera, Projection};
-
-/// Maps world points to the pixels of a perspective camera's picture.
-struct View {
-    center: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-    /// `tan(angle / 2)`: screen half-size at unit depth.
-    tan_half: f32,
-    width: f32,
-    height: f32,
-    side: f32,
-    near: f32,
-}
-
-impl View {
-    fn new(cam: &Camera, width: u32, height: u32, near: f32) -> View {
-        let angle = match cam.kind {
-            Projection::Perspective { angle } => angle,
-            Projection::Orthographic { .. } => DEFAULT_ANGLE_DEG.to_radians(),
-        };
-        View {
-            center: cam.center,
-            forward: cam.direction,
-            right: cam.horizontal,
-            up: cam.up,
-            tan_half: (angle * 0.5).tan(),
-            width: width as f32,
-            height: height as f32,
-            side: width.max(height) as f32,
-            near,
-        }
-    }
-
-    /// Camera-space coordinates: (right, up, depth).
-    fn to_camera(&self, p: Vec3) -> Vec3 {
-        let d = p - self.center;
-        Vec3::new(d.dot(self.right), d.dot(self.up), d.dot(self.forward))
-    }
-
-    /// Pixel position (x from the left, y from the top, continuous) of a camera-space point in
-    /// front of the camera; the inverse of [`Camera::sample_point`] and `generate_ray`.
-    fn to_pixel(&self, c: Vec3) -> [f32; 2] {
-        let sx = 0.5 + c.x / (c.z * 2.0 * self.tan_half);
-        let sy = 0.5 + c.y / (c.z * 2.0 * self.tan_half);
-        let x0 = (self.side - self.width) * 0.5;
-        let y0 = (self.side - self.height) * 0.5;
-        [sx * self.side - x0, y0 + self.height - sy * self.side]
-    }
-
-    /// Length of the un-normalised ray direction (unit depth) through pixel `(px, py)`, which
-    /// turns the frame's distances into depths.
-    fn ray_length(&self, px: f32, py: f32) -> f32 {
-        let x0 = (self.side - self.width) * 0.5;
-        let y0 = (self.side - self.height) * 0.5;
-        let sx = (x0 + px) / self.side - 0.5;
-        let sy = (y0 + self.height - py) / self.side - 0.5;
-        let h = 2.0 * self.tan_half;
-        (1.0 + (sx * h).powi(2) + (sy * h).powi(2)).sqrt()
-    }
-
-    /// The part of the world segment `a`-`b` in front of the near plane, as pixel positions
-    /// with their depths; `None` if it lies wholly behind.
-    fn project_segment(&self, a: Vec3, b: Vec3) -> Option<([f32; 2], f32, [f32; 2], f32)> {
-        let (mut ca, mut cb) = (self.to_camera(a), self.to_camera(b));
-        if ca.z < self.near && cb.z < self.near {
-            return None;
-        }
-        if ca.z < self.near {
-            ca = ca + (cb - ca) * ((self.near - ca.z) / (cb.z - ca.z));
-        } else if cb.z < self.near {
-            cb = cb + (ca - cb) * ((self.near - cb.z) / (ca.z - cb.z));
-        }
-        Some((self.to_pixel(ca), ca.z, self.to_pixel(cb), cb.z))
-    }
-}
 
 /// Display-space RGB canvas with the witness frame's depths for the hidden-part test.
 struct Canvas<'f> {
@@ -614,36 +540,6 @@ fn main_camera() -> Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn projection_inverts_the_camera_rays() {
-        let cam = main_camera();
-        let view = View::new(&cam, 300, 200, 1e-3);
-        for (px, py) in [(0.5f32, 0.5f32), (150.0, 100.0), (299.5, 10.25)] {
-            let ray = cam.generate_ray(Camera::sample_point(px, py, 300, 200));
-            let p = view.to_pixel(view.to_camera(ray.at(7.0)));
-            assert!(
-                (p[0] - px).abs() < 1e-3 && (p[1] - py).abs() < 1e-3,
-                "{p:?} vs {px},{py}"
-            );
-            let depth = view.to_camera(ray.at(7.0)).z;
-            assert!((7.0 / view.ray_length(px, py) - depth).abs() < 1e-4);
-        }
-    }
-
-    #[test]
-    fn segments_behind_the_camera_are_clipped_at_the_near_plane() {
-        let cam = main_camera();
-        let view = View::new(&cam, 100, 100, 0.01);
-        let behind = cam.center - cam.direction;
-        assert!(
-            view.project_segment(behind, behind - cam.direction)
-                .is_none()
-        );
-        let ahead = cam.center + cam.direction * 3.0;
-        let (_, za, _, zb) = view.project_segment(behind, ahead).unwrap();
-        assert!((za - 0.01).abs() < 1e-5 && (zb - 3.0).abs() < 1e-4);
-    }
 
     #[test]
     fn clipping_keeps_the_inside_part_of_a_line() {

@@ -228,8 +228,8 @@ pub fn cutaway(obj: &Object, eye: Vec3) -> Object {
 mod tests {
     use super::*;
     use crate::raytree::SegmentKind;
-    use crate::witness::View;
     use crate::witness::main_camera;
+    use crate::witness::projection::View;
 
     #[test]
     fn the_default_witness_stands_to_the_right_and_above_looking_at_the_hit() {
