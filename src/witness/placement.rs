@@ -2,7 +2,7 @@
 //! [`WitnessPlace`], [`witness_camera`]: orbit the main camera about the eye ray's first hit
 //! and back off until the tree is framed, or stand where the user says) and [`cutaway`], the
 //! scene without the walls the witness would see from behind. The first step of the witness
-//! picture, ahead of the render; it reads only the main camera and the tree.
+//! picture, ahead of its render; it uses no other file of `witness/`.
 //!
 //! ```text
 //! RayTree + main Camera --witness_camera--> witness Camera;  scene --cutaway--> witness scene
