@@ -2,12 +2,12 @@
 //! kind (eye, shadow, reflected, transmitted), with where it starts and ends and what it hit.
 //! A tracer asked for a tree records into a [`RayTree`] while it traces that one pixel; the CLI
 //! writes the tree as JSON ([`RayTree::to_json`]) and draws it over a witness view
-//! (`witness.rs`).
+//! (`witness/`).
 //!
 //! ```text
 //! tracer --add_ray / add_shadow--> RayTree { segments, parent links } --to_json--> FILE.json
 //!                                     |--canonical / approx_eq--> tracer equivalence tests
-//!                                     '--witness.rs--> FILE.png
+//!                                     '--witness/--> FILE.png
 //! ```
 //!
 //! The tree is a flat list of segments with explicit parent links, and nothing here assumes the
