@@ -1,0 +1,142 @@
+//! Running a parsed `whitted render` command: load the scene, render (with a progress bar on
+//! a terminal), write the images, then the optional ray tree of one pixel and its witness
+//! picture, then `--stats`. Reads the [`Command`] of `render.rs`.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use super::render_options::Command;
+use crate::error::Result;
+use crate::options;
+use crate::output;
+use crate::progress::RowBar;
+use crate::raytree::TreeSource;
+use crate::render;
+use crate::scene::Scene;
+use crate::stats::{RayCounts, StatsReport, peak_memory_kib};
+use crate::witness;
+
+/// Loads the scene, renders it and writes the requested images, ray tree and statistics.
+/// Notes about inert course options follow a success (an error stays the only line).
+pub fn execute(cmd: Command) -> Result<()> {
+    let notes = cmd.notes.clone();
+    execute_quietly(cmd)?;
+    for note in &notes {
+        eprintln!("{note}");
+    }
+    Ok(())
+}
+
+fn execute_quietly(cmd: Command) -> Result<()> {
+    options::check_options(&cmd.render)?;
+    let (w, h) = (cmd.render.width, cmd.render.height);
+    let outputs: Vec<&Path> = cmd
+        .output
+        .iter()
+        .chain(cmd.depth.as_ref().map(|d| &d.2))
+        .chain(cmd.normals.iter())
+        .map(PathBuf::as_path)
+        .collect();
+    for out in outputs.iter().chain(cmd.ray_tree_image.as_deref().iter()) {
+        output::check_writable(out, w, h)?;
+    }
+    if let Some((_, _, json)) = &cmd.ray_tree {
+        output::check_creatable(json, "write ray tree")?;
+    }
+    let mut phases: Vec<(&'static str, Duration)> = Vec::new();
+    let t0 = Instant::now();
+    let scene = Scene::load(&cmd.scene)?;
+    phases.push(("parse", t0.elapsed()));
+    if outputs.is_empty() && cmd.ray_tree.is_none() {
+        eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");
+        return Ok(());
+    }
+    let mut rays = RayCounts::default();
+    let (mut accel, mut bounce_time) = (None, Vec::new());
+    if !outputs.is_empty() {
+        let t1 = Instant::now();
+        let bar = RowBar::new("render", h);
+        let frame = render::render_with_progress(&scene, &cmd.render, &|rows| bar.rows_done(rows))?;
+        bar.finish();
+        phases.push(("render", t1.elapsed()));
+        let t2 = Instant::now();
+        if let Some(out) = &cmd.output {
+            output::write_image(&output::color_image(&frame), out)?;
+        }
+        if let Some((near, far, out)) = &cmd.depth {
+            output::write_image(&output::depth_image(&frame, *near, *far), out)?;
+        }
+        if let Some(out) = &cmd.normals {
+            output::write_image(&output::normal_image(&frame), out)?;
+        }
+        phases.push(("write", t2.elapsed()));
+        rays = frame.rays;
+        accel = frame.accel;
+        bounce_time = frame.bounce_time;
+    }
+    if let Some((x, y, json)) = &cmd.ray_tree {
+        let t3 = Instant::now();
+        write_ray_tree(&cmd, &scene, *x, *y, json)?;
+        phases.push(("ray_tree", t3.elapsed()));
+    }
+    if cmd.stats {
+        let report = StatsReport {
+            scene: cmd.scene.display().to_string(),
+            primitives: scene.primitive_count(),
+            lights: scene.lights.len(),
+            width: w,
+            height: h,
+            tracer: cmd.render.tracer.name(),
+            threads: match cmd.render.threads {
+                0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+                n => n,
+            },
+            rays,
+            phases,
+            peak_kib: peak_memory_kib(),
+            accel,
+            bounce_time,
+        };
+        eprint!("{}", report.human());
+        eprintln!("{}", report.line());
+    }
+    Ok(())
+}
+
+/// Traces pixel `(x, y)` again, recording its ray tree; writes it as JSON to `json` and, when
+/// asked, renders the witness view and draws the tree over it.
+fn write_ray_tree(cmd: &Command, scene: &Scene, x: u32, y: u32, json: &Path) -> Result<()> {
+    let opts = &cmd.render;
+    let (tree, _) = render::trace_ray_tree(scene, opts, x, y)?;
+    let scene_name = cmd.scene.display().to_string();
+    let source = TreeSource {
+        scene: &scene_name,
+        tracer: opts.tracer.name(),
+        pixel: [x, y],
+        image_size: [opts.width, opts.height],
+    };
+    output::write_atomic_as(json, tree.to_json(&source).as_bytes(), "write ray tree")?;
+    let Some(image) = &cmd.ray_tree_image else {
+        return Ok(());
+    };
+    let camera =
+        witness::witness_camera(&scene.camera, &tree, opts.width, opts.height, &cmd.witness);
+    let witness_scene = Scene {
+        camera: camera.clone(),
+        root: witness::cutaway(&scene.root, camera.center),
+        ..scene.clone()
+    };
+    let bar = RowBar::new("witness", opts.height);
+    let frame = render::render_with_progress(&witness_scene, opts, &|rows| bar.rows_done(rows))?;
+    bar.finish();
+    let title = format!("ray tree of pixel ({x}, {y})");
+    let picture = witness::draw_ray_tree(
+        &frame,
+        &camera,
+        &scene.camera,
+        (opts.width, opts.height),
+        &tree,
+        &title,
+    );
+    output::write_image(&picture, image)
+}

@@ -1,0 +1,154 @@
+//! `whitted render` and the course's command lines: [`parse_args`] runs a command line through
+//! the table of `render_options.rs` into a [`Command`], then checks what no single option can
+//! (a scene and an output are given, no file is given for two outputs, the ray-tree pixel lies
+//! in the image); [`help`] prints the table. `execute.rs` runs the parsed [`Command`].
+
+use std::path::{Component, Path, PathBuf};
+
+pub use super::render_options::{Command, OPTIONS};
+use super::table::{self, Parsed};
+use crate::error::{Error, Result};
+use crate::options;
+
+/// The usage lines of `whitted render`, shared with the overview of `whitted --help`.
+pub const USAGE: &str = concat!(
+    "    whitted render SCENE -o OUT.png [OPTIONS]\n",
+    "    whitted render SCENE --ray-tree X Y TREE.json [--ray-tree-image TREE.png] [OPTIONS]\n",
+    "    whitted -input SCENE -size W H -output OUT.tga [OPTIONS]   (the course's command lines)\n",
+);
+
+/// The last paragraph of the render help and the overview.
+pub const EXIT_CODES: &str = "EXIT CODES: 0 success, 2 any error (one line on stderr: \
+                              `error: path:line:col: expected ...`).\n";
+
+/// The text of `whitted render --help`: the usage and every option of [`OPTIONS`].
+pub fn help() -> String {
+    format!(
+        "whitted render: render a scene file of the MIT 6.837 format to images\n\n\
+         USAGE:\n{USAGE}\n{}",
+        options_help()
+    )
+}
+
+/// The option sections of the render help, the course's spellings and the exit codes; the
+/// overview of `whitted --help` shows them too.
+pub fn options_help() -> String {
+    let course: Vec<&str> = OPTIONS
+        .options
+        .iter()
+        .filter(|o| !o.long.is_empty() && !o.course.is_empty())
+        .map(|o| o.course)
+        .collect();
+    let note = format!(
+        "Every option takes one dash or two, and `_` or `-` inside its name: the course's \
+         spellings {} are those of the options above.",
+        course.join(" ")
+    );
+    format!(
+        "{}{}\n\n{EXIT_CODES}",
+        table::help(&OPTIONS),
+        table::wrap(&note, 100).join("\n")
+    )
+}
+
+/// Parses options of either style. `modern` allows a positional scene path and turns the
+/// lecture's specular fix on; `None` asks for the help text.
+pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command>> {
+    let mut cmd = Command::new(modern);
+    let positional = modern.then_some("--input");
+    if table::parse(&OPTIONS, args, &mut cmd, positional)? == Parsed::Help {
+        return Ok(None);
+    }
+    check(&cmd, modern)?;
+    Ok(Some(cmd))
+}
+
+/// [`parse_render_args`] for a command line that must render (`--help` is an error).
+pub fn parse_args(args: &[String], modern: bool) -> Result<Command> {
+    parse_render_args(args, modern)?
+        .ok_or_else(|| Error::Usage("expected a render, found --help".to_string()))
+}
+
+/// The checks across options, once every option is read.
+fn check(cmd: &Command, modern: bool) -> Result<()> {
+    if cmd.scene.as_os_str().is_empty() {
+        return Err(Error::Usage(if modern {
+            "expected a scene file: whitted render SCENE -o OUT.png".to_string()
+        } else {
+            "expected a scene file: -input SCENE".to_string()
+        }));
+    }
+    if modern
+        && cmd.output.is_none()
+        && cmd.depth.is_none()
+        && cmd.normals.is_none()
+        && cmd.ray_tree.is_none()
+    {
+        return Err(Error::Usage(
+            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree)".to_string(),
+        ));
+    }
+    if cmd.ray_tree_image.is_some() && cmd.ray_tree.is_none() {
+        return Err(Error::Usage(
+            "option --ray-tree-image needs --ray-tree X Y FILE.json to say which pixel".to_string(),
+        ));
+    }
+    if let Some((x, y, _)) = &cmd.ray_tree {
+        options::check_pixel(*x, *y, &cmd.render)
+            .map_err(|e| Error::Usage(format!("option --ray-tree: {}", usage_text(e))))?;
+    }
+    check_distinct_outputs(cmd, !modern)
+}
+
+/// Refuses one file given for two outputs (the second write would replace the first).
+fn check_distinct_outputs(cmd: &Command, course_style: bool) -> Result<()> {
+    let outputs: Vec<(&str, &Path)> = [
+        ("--output", cmd.output.as_deref()),
+        ("--depth", cmd.depth.as_ref().map(|d| d.2.as_path())),
+        ("--normals", cmd.normals.as_deref()),
+        ("--ray-tree", cmd.ray_tree.as_ref().map(|r| r.2.as_path())),
+        ("--ray-tree-image", cmd.ray_tree_image.as_deref()),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| {
+        let spelling = OPTIONS
+            .get(option)
+            .map_or(option, |o| o.spelling(course_style));
+        Some((spelling, path?))
+    })
+    .collect();
+    for (i, (first, a)) in outputs.iter().enumerate() {
+        if let Some((second, _)) = outputs[i + 1..].iter().find(|(_, b)| same_file(a, b)) {
+            return Err(Error::Usage(format!(
+                "options {first} and {second}: expected different files, found `{}` for both",
+                a.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether `a` and `b` name one file: equal once `.` components are dropped, or once their
+/// folders (where they exist) are resolved.
+fn same_file(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| -> PathBuf {
+        let lexical: PathBuf = p.components().filter(|c| *c != Component::CurDir).collect();
+        let folder = match lexical.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        match (folder.canonicalize(), lexical.file_name()) {
+            (Ok(folder), Some(name)) => folder.join(name),
+            _ => lexical,
+        }
+    };
+    resolved(a) == resolved(b)
+}
+
+/// The message of a usage error without the `--help` hint (it is added once, outside).
+fn usage_text(e: Error) -> String {
+    match e {
+        Error::Usage(msg) => msg,
+        e => e.to_string(),
+    }
+}
