@@ -2,7 +2,7 @@
 //! with the Embree 3 harness in `../shared/peer-embree/`. Four procedural scenes, one pinhole
 //! camera whose rays come in 4x2 pixel tiles (one tile = one packet), and three secondary queues
 //! built from the primary hits (shadow, mirror, diffuse). Every figure is printed as one `CSV,`
-//! row. The command line (`cli.rs`) parses the options into [`BenchOptions`] and calls [`run`].
+//! row. The command line (`cli/bench.rs`) parses the options into [`BenchOptions`] and calls [`run`].
 //!
 //! ```text
 //! scenes.rs   BenchScene --geometry--> Geometry --build_bvh (timed: build_1t_ms)
@@ -102,7 +102,7 @@ fn thread_pool(threads: usize) -> Result<ThreadPool> {
 
 /// The best wall time of `reps` runs of `timed` on `results`, each preceded by an untimed
 /// `reset` of them.
-pub fn best_of<R: ?Sized>(
+fn best_of<R: ?Sized>(
     reps: u32,
     results: &mut R,
     reset: impl Fn(&mut R),
