@@ -140,7 +140,7 @@ impl Kernel for AnyPacket {
 }
 
 /// Traces every entry of `items` into its result with kernel `K`, on the calling thread or
-/// spread over `pool` in chunks of [`CHUNK`] entries.
+/// spread over `pool` in chunks of `CHUNK` entries.
 #[inline(always)]
 pub fn trace<K: Kernel>(
     geometry: &Geometry,

@@ -13,7 +13,7 @@
 //! report.rs   a human line and a `CSV,` row per figure; peak memory from stats.rs
 //! ```
 //!
-//! This file is the driver: it times each kernel with [`best_of`] and hands the figures to the
+//! This file is the driver: it times each kernel with `best_of` and hands the figures to the
 //! report. The secondary queues are built from the hits of the packet path (the path the
 //! renderer uses); the scalar kernels trace the same queues. A timed region holds only the
 //! tracing calls: rays are generated and packed, and results reset, before it.
