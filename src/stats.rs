@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! tracer (per row / per bounce, local counters) --merge--> Frame.rays --+
-//! cli.rs phase timers + peak_memory_kib() -------------------------------+--> StatsReport -> stderr
+//! cli/execute.rs phase timers + peak_memory_kib() -----------------------+--> StatsReport -> stderr
 //! ```
 
 use std::fmt::Write as _;
