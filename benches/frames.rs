@@ -1,5 +1,5 @@
 //! Whole frames, both tracers, one thread, 128 x 128: our `scenes/*.txt` (with the options their
-//! header's "Render with:" line gives), and, when `WHITTED_COURSE_DIR` names the course data,
+//! header's "Render:" line gives), and, when `WHITTED_COURSE_DIR` names the course data,
 //! every assignment 4 scene (the options of its last handout command line that writes an image)
 //! and the 5k-triangle bunny of assignment 5. Criterion reports Melem/s = Mpixels/s. A last
 //! group renders the showcase at 256 x 256 on 1 and 2 threads (thread scaling).
@@ -20,21 +20,22 @@ struct Frame {
     opts: RenderOptions,
 }
 
-/// `whitted render` options from the "Render with:" text of a scene file's header comment.
+/// `whitted render` options from the "Render:" command of a scene file's header comment.
 fn header_options(path: &Path) -> RenderOptions {
     let text = std::fs::read_to_string(path).expect("readable scene");
     let header: Vec<&str> = text.lines().map_while(|l| l.strip_prefix('#')).collect();
     let header = header.join(" ");
     let flags = header
-        .split_once("Render with:")
-        .map_or("", |(_, rest)| rest)
+        .split_once("Render:")
+        .unwrap_or_else(|| panic!("{}: no `# Render:` line in the header", path.display()))
+        .1
         .split_whitespace()
         .skip_while(|t| !t.starts_with("--"));
     let mut args = vec![path.display().to_string()];
     args.extend(flags.map(String::from));
     args.extend(["-o".to_string(), "frame.png".to_string()]);
     parse_args(&args, true)
-        .unwrap_or_else(|e| panic!("{}: bad Render with: line: {e}", path.display()))
+        .unwrap_or_else(|e| panic!("{}: bad Render: line: {e}", path.display()))
         .render
 }
 
