@@ -329,7 +329,7 @@ impl<'s> ReferenceTracer<'s> {
         };
         let mut color = shade::ambient(scene, &s);
         for (index, light) in scene.lights.iter().enumerate() {
-            let Some(sample) = shade::light_sample(&s, ray.dir, light, &self.opts) else {
+            let Some(sample) = shade::light_sample(scene, &s, ray.dir, light, &self.opts) else {
                 continue;
             };
             let visible = if self.opts.shadows {

@@ -57,7 +57,12 @@ pub struct Surface {
     pub normal: Vec3,
     /// True when the ray arrived from the side the geometric normal points to.
     pub front: bool,
+    /// The material's parameters at the point (textures interpolated: the ambient term,
+    /// mirror and transparent colours and index of refraction come from here).
     pub material: Phong,
+    /// The material's index, for direct light, which blends the shading of a texture's
+    /// materials rather than their parameters ([`Scene::for_each_layer`]).
+    pub material_index: u32,
 }
 
 /// Prepares `hit` for shading; `None` means the pixel contribution is black (a back face
@@ -75,6 +80,7 @@ pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Opti
         normal: if front { hit.normal } else { -hit.normal },
         front,
         material,
+        material_index: hit.material,
     })
 }
 
@@ -113,23 +119,22 @@ pub struct LightSample {
 }
 
 /// The contribution of `light` to `s` seen along `dir`, with the shadow ray that decides it;
-/// `None` when the light adds nothing (surface facing away).
+/// `None` when the light adds nothing (surface facing away). On a solid texture it is the
+/// blend of each of its materials' own Blinn-Phong result.
 #[inline]
 pub fn light_sample(
+    scene: &Scene,
     s: &Surface,
     dir: Vec3,
     light: &Light,
     opts: &ShadeOptions,
 ) -> Option<LightSample> {
     let ill = light.illuminate(s.point);
-    let color = saturate(phong(
-        &s.material,
-        dir,
-        s.normal,
-        ill.dir,
-        ill.color,
-        opts.specular_fix,
-    ));
+    let mut color = Vec3::ZERO;
+    scene.for_each_layer(s.material_index, s.point, &mut |m, w| {
+        color += w * phong(m, dir, s.normal, ill.dir, ill.color, opts.specular_fix);
+    });
+    let color = saturate(color);
     if color == Vec3::ZERO {
         return None;
     }

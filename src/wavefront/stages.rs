@@ -106,7 +106,7 @@ pub fn shade_hits(
         };
         out.color[px] += throughput * shade::ambient(scene, &s);
         for (index, light) in scene.lights.iter().enumerate() {
-            let Some(sample) = shade::light_sample(&s, ray.dir, light, ctx.opts) else {
+            let Some(sample) = shade::light_sample(scene, &s, ray.dir, light, ctx.opts) else {
                 continue;
             };
             if ctx.opts.shadows {
