@@ -6,7 +6,7 @@
 use std::time::Duration;
 
 use crate::math::Vec3;
-use crate::stats::{AccelStats, RayCounts};
+use crate::stats::{AccelStats, GridStats, RayCounts};
 
 /// A rendered frame, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,6 +25,8 @@ pub struct Frame {
     pub accel: Option<AccelStats>,
     /// Packet tracer: time spent on each bounce, summed over worker threads.
     pub bounce_time: Vec<Duration>,
+    /// The course's grid, when the options asked for one.
+    pub grid: Option<GridStats>,
 }
 
 impl Frame {
@@ -57,6 +59,7 @@ impl Frame {
             rays: RayCounts::default(),
             accel: None,
             bounce_time: Vec::new(),
+            grid: None,
         }
     }
 }

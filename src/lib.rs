@@ -40,7 +40,9 @@
 //!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays,
 //!                          |      bvh/ builds a binned-SAH BVH over them; wavefront/ queues
 //!                          |      rays per bounce, intersects 8 at a time (packet.rs, simd.rs)
-//!                          |  shade.rs and intersect/ hold the maths both tracers share
+//!                          |  shade.rs and intersect/ hold the maths both tracers share;
+//!                          |  grid/ is the course's grid: --stats, and the -visualize_grid
+//!                          |      picture both tracers draw with its march
 //!                          v
 //!            output.rs: Frame -> PNG / TGA / PPM, written atomically
 //!
@@ -59,7 +61,8 @@
 //! leaves       error, math, simd (the only file naming `wide`), progress
 //! data         packet (8-ray SoA), scene (parsed tree, cameras, textures)
 //! kernels      intersect (Hit and the primitive tests), bvh (knows no primitive)
-//! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH)
+//! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH),
+//!              grid (the course's uniform grid and its picture)
 //! tracers      reference (recursive), wavefront (queues and packets)
 //! front door   render (threads, picks a tracer), output (files), witness (ray-tree picture)
 //! commands     bench, cli (main.rs calls cli::run)
@@ -80,6 +83,8 @@ pub mod error;
 pub mod frame;
 #[doc(hidden)]
 pub mod geometry;
+#[doc(hidden)]
+pub mod grid;
 #[doc(hidden)]
 pub mod intersect;
 pub mod math;

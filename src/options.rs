@@ -12,6 +12,8 @@ pub const DEFAULT_MAX_PIXELS: u64 = 1 << 26;
 pub const DEFAULT_MAX_BOUNCES: u32 = 1000;
 /// The most worker threads a render starts.
 pub const MAX_THREADS: usize = 1024;
+/// The most cells a grid may have without `--max-grid-cells` (16 Mi cells, 64 MiB of counts).
+pub const DEFAULT_MAX_GRID_CELLS: u64 = 1 << 24;
 /// Worker-thread stack for the recursion of one bounce (measured: between 256 B and 1 KiB).
 const STACK_PER_BOUNCE: usize = 8 << 10;
 /// Bytes a frame holds per pixel (colour, depth, normal) plus the 8-bit image made from it.
@@ -45,6 +47,27 @@ impl Tracer {
     }
 }
 
+/// The grid pictures (see `grid::picture`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GridView {
+    /// The occupied cells shaded by the scene's lights (`-visualize_grid`).
+    Lit,
+    /// The occupied cells in their count's colour, unlit (`-visualize_grid_count`).
+    Count,
+}
+
+/// The course's uniform grid (`-grid NX NY NZ`): whitted renders with its BVH whatever this
+/// says; the grid is built for `--stats` and for its picture.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridOptions {
+    /// Cells per axis.
+    pub cells: [u32; 3],
+    /// Draw the grid's occupancy instead of the scene.
+    pub view: Option<GridView>,
+    /// Refuse grids with more cells than this (`--max-grid-cells`).
+    pub max_cells: u64,
+}
+
 /// Everything that decides the pixels of a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
@@ -58,6 +81,8 @@ pub struct RenderOptions {
     pub max_pixels: u64,
     /// Refuse bounce counts above this.
     pub max_bounces: u32,
+    /// The course's grid, if asked for.
+    pub grid: Option<GridOptions>,
 }
 
 impl Default for RenderOptions {
@@ -70,6 +95,7 @@ impl Default for RenderOptions {
             threads: 0,
             max_pixels: DEFAULT_MAX_PIXELS,
             max_bounces: DEFAULT_MAX_BOUNCES,
+            grid: None,
         }
     }
 }
@@ -111,6 +137,9 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
             opts.threads
         )));
     }
+    if let Some(grid) = &opts.grid {
+        check_grid(grid)?;
+    }
     // Probe for the frame's memory so a size that cannot be allocated is an error, not an abort.
     let bytes = pixels.saturating_mul(BYTES_PER_PIXEL);
     let fits = usize::try_from(bytes).is_ok_and(|b| Vec::<u8>::new().try_reserve_exact(b).is_ok());
@@ -120,6 +149,25 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
             opts.width,
             opts.height,
             (pixels as u128 * BYTES_PER_PIXEL as u128) >> 20
+        )));
+    }
+    Ok(())
+}
+
+/// Checks a grid resolution: at least one cell per axis, no more cells than its limit.
+pub fn check_grid(grid: &GridOptions) -> Result<()> {
+    let [nx, ny, nz] = grid.cells;
+    if grid.cells.contains(&0) {
+        return Err(Error::Usage(format!(
+            "grid {nx}x{ny}x{nz}: expected at least 1 cell along each axis"
+        )));
+    }
+    let total = grid.cells.iter().map(|&n| n as u64).product::<u64>();
+    if total > grid.max_cells {
+        return Err(Error::Limit(format!(
+            "grid {nx}x{ny}x{nz} has {total} cells, over the limit of {} (raise it with \
+             --max-grid-cells N)",
+            grid.max_cells
         )));
     }
     Ok(())

@@ -15,6 +15,8 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::frame::Frame;
+use crate::grid::Grid;
+use crate::grid::picture::{self, GridView};
 use crate::intersect::{Hit, intersect_plane, intersect_sphere, intersect_triangle};
 use crate::math::{Ray, Vec3, saturate, transform_normal};
 use crate::options::{Progress, RenderOptions, stack_size};
@@ -215,6 +217,44 @@ pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress)
             rays
         })
         .reduce(RayCounts::default, RayCounts::merged);
+    frame
+}
+
+/// Draws the grid picture of `grid` (see [`crate::grid::picture`]): one camera ray per pixel,
+/// rows in parallel, each marched through the grid by the march the packet tracer shares.
+pub fn render_grid_reference(
+    scene: &Scene,
+    grid: &Grid,
+    view: GridView,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Frame {
+    let (w, h) = (opts.width, opts.height);
+    let mut frame = Frame::new(w, h);
+    frame
+        .color
+        .par_chunks_mut(w as usize)
+        .zip(frame.depth.par_chunks_mut(w as usize))
+        .zip(frame.normal.par_chunks_mut(w as usize))
+        .enumerate()
+        .for_each(|(y, ((color, depth), normal))| {
+            for x in 0..w {
+                let ray = scene
+                    .camera
+                    .generate_ray(Camera::pixel_point(x, y as u32, w, h));
+                let i = x as usize;
+                let (c, hit) = picture::pixel(scene, grid, view, &ray, scene.camera.tmin());
+                color[i] = c;
+                if let Some((t, n)) = hit {
+                    depth[i] = t;
+                    normal[i] = n;
+                }
+            }
+            progress(1);
+        });
+    frame
+        .rays
+        .count_many(SegmentKind::Eye, 0, w as u64 * h as u64);
     frame
 }
 

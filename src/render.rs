@@ -2,19 +2,22 @@
 //! the worker threads and hands the frame to the chosen tracer's own frame loop
 //! ([`crate::reference::render_reference`] or [`crate::wavefront::render_packet`]), and traces
 //! one pixel again to record its ray tree ([`trace_ray_tree`]). It knows no tracer's insides.
+//! With a grid in the options it builds the course's grid first (for `--stats`), and for a grid
+//! picture hands the frame to the tracer's grid loop instead.
 
 use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::geometry::Geometry;
+use crate::grid::Grid;
 use crate::math::Vec3;
 use crate::options::{Progress, RenderOptions, Tracer, check_options, check_pixel, stack_size};
 use crate::raytree::RayTree;
-use crate::reference::{render_reference, trace_pixel_tree};
+use crate::reference::{render_grid_reference, render_reference, trace_pixel_tree};
 use crate::scene::Scene;
-use crate::stats::AccelStats;
-use crate::wavefront::render_packet;
+use crate::stats::{AccelStats, GridStats};
+use crate::wavefront::{render_grid_packet, render_packet};
 
 /// Renders `scene` with `opts`.
 pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Frame> {
@@ -39,6 +42,35 @@ pub fn render_with_progress(
                 opts.shade.bounces
             ))
         })?;
+    if let Some(grid_opts) = &opts.grid {
+        let t0 = Instant::now();
+        let grid = Grid::build(scene, grid_opts.cells);
+        let stats = GridStats {
+            build: t0.elapsed(),
+            ..grid.stats()
+        };
+        let mut frame = match (grid_opts.view, opts.tracer) {
+            (Some(view), Tracer::Reference) => {
+                pool.install(|| render_grid_reference(scene, &grid, view, opts, progress))
+            }
+            (Some(view), Tracer::Packet) => {
+                pool.install(|| render_grid_packet(scene, &grid, view, opts, progress))
+            }
+            (None, _) => render_scene(scene, opts, &pool, progress)?,
+        };
+        frame.grid = Some(stats);
+        return Ok(frame);
+    }
+    render_scene(scene, opts, &pool, progress)
+}
+
+/// Renders the scene itself (not the grid picture) with the chosen tracer.
+fn render_scene(
+    scene: &Scene,
+    opts: &RenderOptions,
+    pool: &rayon::ThreadPool,
+    progress: Progress,
+) -> Result<Frame> {
     match opts.tracer {
         Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
         Tracer::Packet => {

@@ -84,6 +84,39 @@ pub struct AccelStats {
     pub bounded: usize,
 }
 
+/// The course's grid (`-grid NX NY NZ`): its size, box and occupancy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridStats {
+    /// Cells per axis.
+    pub cells: [u32; 3],
+    /// The grid's box (`None`: the scene has no bounded primitive).
+    pub bounds: Option<([f32; 3], [f32; 3])>,
+    /// Cells at least one primitive marks.
+    pub occupied: u64,
+    /// The most primitives marking one cell.
+    pub max_count: u32,
+    /// Primitive marks summed over all cells.
+    pub marks: u64,
+    /// Building the grid.
+    pub build: Duration,
+}
+
+impl GridStats {
+    /// All cells.
+    pub fn total(&self) -> u64 {
+        self.cells.iter().map(|&n| n as u64).product()
+    }
+
+    /// The mean number of primitives in an occupied cell (0 when none is).
+    pub fn mean_count(&self) -> f64 {
+        if self.occupied == 0 {
+            0.0
+        } else {
+            self.marks as f64 / self.occupied as f64
+        }
+    }
+}
+
 /// The process's peak resident memory in KiB (`VmHWM` in `/proc/self/status`), where the
 /// system reports it.
 pub fn peak_memory_kib() -> Option<u64> {
@@ -123,6 +156,8 @@ pub struct StatsReport {
     pub accel: Option<AccelStats>,
     /// Packet tracer: time per bounce, summed over worker threads.
     pub bounce_time: Vec<Duration>,
+    /// The course's grid, when `-grid` asked for one.
+    pub grid: Option<GridStats>,
 }
 
 /// `1234567` as `1,234,567`.
@@ -215,6 +250,31 @@ impl StatsReport {
                 ms(a.build)
             );
         }
+        if let Some(g) = &self.grid {
+            let [nx, ny, nz] = g.cells;
+            let bounds = match g.bounds {
+                Some((lo, hi)) => format!(
+                    "{:.4} {:.4} {:.4} -> {:.4} {:.4} {:.4}",
+                    lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]
+                ),
+                None => "NULL (no bounded primitive)".to_string(),
+            };
+            let _ = writeln!(
+                s,
+                "  grid     {nx}x{ny}x{nz} = {} cells over {bounds}, built in {:.1} ms",
+                grouped(g.total()),
+                ms(g.build)
+            );
+            let _ = writeln!(
+                s,
+                "           {} occupied ({:.1}%), at most {} and on average {:.2} primitives \
+                 per occupied cell",
+                grouped(g.occupied),
+                100.0 * g.occupied as f64 / g.total().max(1) as f64,
+                g.max_count,
+                g.mean_count()
+            );
+        }
         if !self.bounce_time.is_empty() {
             let times: Vec<String> = self
                 .bounce_time
@@ -269,6 +329,21 @@ impl StatsReport {
                 a.nodes,
                 a.bounded,
                 ms(a.build)
+            );
+        }
+        if let Some(g) = &self.grid {
+            let _ = write!(
+                s,
+                " grid={}x{}x{} grid_cells={} grid_occupied={} grid_max_count={} \
+                 grid_mean_count={:.3} grid_build_ms={:.3}",
+                g.cells[0],
+                g.cells[1],
+                g.cells[2],
+                g.total(),
+                g.occupied,
+                g.max_count,
+                g.mean_count(),
+                ms(g.build)
             );
         }
         for (b, d) in self.bounce_time.iter().enumerate() {

@@ -52,7 +52,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         return Ok(());
     }
     let mut rays = RayCounts::default();
-    let (mut accel, mut bounce_time) = (None, Vec::new());
+    let (mut accel, mut bounce_time, mut grid) = (None, Vec::new(), None);
     if !outputs.is_empty() {
         let t1 = Instant::now();
         let bar = RowBar::new("render", h);
@@ -73,6 +73,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         rays = frame.rays;
         accel = frame.accel;
         bounce_time = frame.bounce_time;
+        grid = frame.grid;
     }
     if let Some((x, y, json)) = &cmd.ray_tree {
         let t3 = Instant::now();
@@ -96,6 +97,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             peak_kib: peak_memory_kib(),
             accel,
             bounce_time,
+            grid,
         };
         eprint!("{}", report.human());
         eprintln!("{}", report.line());

@@ -8,7 +8,7 @@ use std::path::{Component, Path, PathBuf};
 pub use super::render_options::{Command, OPTIONS};
 use super::table::{self, Parsed};
 use crate::error::{Error, Result};
-use crate::options;
+use crate::options::{self, GridOptions};
 
 /// The usage lines of `whitted render`, shared with the overview of `whitted --help`.
 pub const USAGE: &str = concat!(
@@ -60,7 +60,24 @@ pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command
         return Ok(None);
     }
     check(&cmd, modern)?;
+    cmd.render.grid = grid_options(&cmd)?;
     Ok(Some(cmd))
+}
+
+/// The grid the options ask for: `--grid` with the view of `--visualize-grid(-count)`, which
+/// needs it.
+fn grid_options(cmd: &Command) -> Result<Option<GridOptions>> {
+    match (cmd.grid, &cmd.grid_view) {
+        (Some(cells), view) => Ok(Some(GridOptions {
+            cells,
+            view: view.as_ref().map(|v| v.0),
+            max_cells: cmd.max_grid_cells,
+        })),
+        (None, Some((_, typed))) => Err(Error::Usage(format!(
+            "option {typed} needs -grid NX NY NZ to say which grid to draw"
+        ))),
+        (None, None) => Ok(None),
+    }
 }
 
 /// [`parse_render_args`] for a command line that must render (`--help` is an error).

@@ -13,6 +13,7 @@
 //! of bounce `b + 1` and the first is reset once bounce `b` is done. Hits and shadow rays live
 //! in a scratch arena reset at every bounce.
 
+mod grid;
 pub mod queue;
 mod stages;
 
@@ -30,6 +31,7 @@ use crate::raytree::{RayTree, SegmentKind};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
 use crate::stats::RayCounts;
+pub use grid::render_grid_packet;
 use queue::RayQueue;
 use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 
