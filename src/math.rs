@@ -44,6 +44,21 @@ pub fn is_degenerate(v: &[Vec3; 3]) -> bool {
     !(area2 > 1e-7 * e1.length() * e2.length() && cross.try_normalize().is_some())
 }
 
+/// The barycentric coordinates `(u, v)` (weights of `v0 + e1` and `v0 + e2`) of the point
+/// where `ray` crosses the plane of the triangle `(v0, v0 + e1, v0 + e2)`, by the same
+/// Moller-Trumbore numerators as the intersection kernels; `(0, 0)` for a ray in the plane.
+/// Tracers compute them for the one triangle a ray hit, after the traversal.
+#[inline]
+pub fn barycentrics(v0: Vec3, e1: Vec3, e2: Vec3, ray: &Ray) -> (f32, f32) {
+    let s = ray.origin - v0;
+    let r = s.cross(ray.dir);
+    let det = -ray.dir.dot(e1.cross(e2));
+    if det == 0.0 || !det.is_finite() {
+        return (0.0, 0.0);
+    }
+    (r.dot(e2) / det, -r.dot(e1) / det)
+}
+
 /// Mirror direction of `dir` about the normal `n` (unit): `R = V - 2 (V.N) N`. The sign of `n`
 /// does not matter.
 #[inline]
@@ -98,6 +113,24 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn barycentrics_locate_the_crossing_point() {
+        let (v0, e1, e2) = (Vec3::new(1.0, 0.0, 0.0), Vec3::X, Vec3::Y * 2.0);
+        for (u, v) in [(0.25, 0.5), (0.0, 0.0), (1.0, 0.0), (0.1, 0.9)] {
+            let p = v0 + e1 * u + e2 * v;
+            for dir in [-Vec3::Z, Vec3::new(0.3, -0.2, 1.0)] {
+                let ray = Ray::new(p - dir * 3.0, dir);
+                let (bu, bv) = barycentrics(v0, e1, e2, &ray);
+                assert!(
+                    (bu - u).abs() < 1e-5 && (bv - v).abs() < 1e-5,
+                    "{u} {v}: {bu} {bv}"
+                );
+            }
+        }
+        let along = Ray::new(Vec3::new(-1.0, 0.5, 0.0), Vec3::X);
+        assert_eq!(barycentrics(v0, e1, e2, &along), (0.0, 0.0));
     }
 
     #[test]

@@ -535,6 +535,7 @@ mod tests {
         Some(Hit {
             t,
             normal: Vec3::Z,
+            shading: Vec3::Z,
             material: prim * 10,
             prim,
         })

@@ -18,9 +18,10 @@ use crate::frame::Frame;
 use crate::grid::Grid;
 use crate::grid::picture::{self, GridView};
 use crate::intersect::{Hit, intersect_plane, intersect_sphere, intersect_triangle};
-use crate::math::{Ray, Vec3, saturate, transform_normal};
+use crate::math::{Ray, Vec3, barycentrics, saturate, transform_normal};
 use crate::options::{Progress, RenderOptions, stack_size};
 use crate::raytree::{RayTree, SegmentId, SegmentKind};
+use crate::scene::normals::interpolate;
 use crate::scene::{Camera, Object, Scene};
 use crate::shade::{self, EPSILON, ShadeOptions};
 use crate::stats::RayCounts;
@@ -49,6 +50,7 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
                 *best = Some(Hit {
                     t,
                     normal,
+                    shading: normal,
                     material: *material,
                     prim: *id,
                 });
@@ -66,6 +68,7 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
                 *best = Some(Hit {
                     t,
                     normal: *normal,
+                    shading: *normal,
                     material: *material,
                     prim: *id,
                 });
@@ -74,10 +77,11 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             None => false,
         },
         Object::Triangle { v, material, id } => {
-            intersect_one_triangle(v, *material, *id, ray, tmin, limit, best)
+            intersect_one_triangle(v, None, *material, *id, ray, tmin, limit, best)
         }
         Object::Mesh {
             triangles,
+            normals,
             material,
             first_id,
         } => {
@@ -85,7 +89,8 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             for (k, v) in triangles.iter().enumerate() {
                 let limit = best.map_or(tmax, |h| h.t);
                 let id = first_id + k as u32;
-                found |= intersect_one_triangle(v, *material, id, ray, tmin, limit, best);
+                let corners = normals.get(k);
+                found |= intersect_one_triangle(v, corners, *material, id, ray, tmin, limit, best);
             }
             found
         }
@@ -104,7 +109,13 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
             let mut local_best = *best;
             if intersect(&tr.child, &local, tmin, tmax, &mut local_best) {
                 let mut hit = local_best.expect("a hit was found");
+                let flat = hit.shading == hit.normal;
                 hit.normal = transform_normal(&tr.normal_matrix, hit.normal);
+                hit.shading = if flat {
+                    hit.normal
+                } else {
+                    transform_normal(&tr.normal_matrix, hit.shading)
+                };
                 *best = Some(hit);
                 true
             } else {
@@ -114,8 +125,12 @@ fn intersect(obj: &Object, ray: &Ray, tmin: f32, tmax: f32, best: &mut Option<Hi
     }
 }
 
+/// One triangle, with its corner normals if it is shaded smoothly (the barycentrics that
+/// interpolate them are computed only for the hit).
+#[allow(clippy::too_many_arguments)] // reason: the triangle, its material and id, the query
 fn intersect_one_triangle(
     v: &[Vec3; 3],
+    corners: Option<&[Vec3; 3]>,
     material: u32,
     prim: u32,
     ray: &Ray,
@@ -127,9 +142,18 @@ fn intersect_one_triangle(
     let e2 = v[2] - v[0];
     match intersect_triangle(v[0], e1, e2, ray, tmin, tmax) {
         Some(t) => {
+            let normal = e1.cross(e2).normalize();
+            let shading = match corners {
+                Some(n) => {
+                    let (u, w) = barycentrics(v[0], e1, e2, ray);
+                    interpolate(n, u, w, normal)
+                }
+                None => normal,
+            };
             *best = Some(Hit {
                 t,
-                normal: e1.cross(e2).normalize(),
+                normal,
+                shading,
                 material,
                 prim,
             });
@@ -210,7 +234,7 @@ pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress)
                 color[i] = sample.color;
                 if let Some(hit) = sample.hit {
                     depth[i] = hit.t;
-                    normal[i] = hit.normal;
+                    normal[i] = hit.shading;
                 }
             }
             progress(1);

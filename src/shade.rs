@@ -8,6 +8,10 @@
 //! light * (diffuse * max(n.l, 0) + specular * max(n.h, 0)^q)`, with the specular term scaled by
 //! `max(n.l, 0)` (the lecture's fix; off with `specular_fix = false`, which only clamps it to
 //! zero where `n.l <= 0`). Back faces are black unless `shade_back` flips their normal.
+//!
+//! Smooth meshes shade with their interpolated normal; the geometric normal still decides the
+//! side a ray hit, whether a light is above the surface, and that mirror and refracted rays
+//! leave on their own side of it.
 
 use crate::intersect::Hit;
 use crate::math::{Ray, Vec3, reflect, refract, saturate, schlick};
@@ -53,8 +57,12 @@ impl Default for ShadeOptions {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
     pub point: Vec3,
-    /// The shading normal: the geometric normal, flipped towards the viewer when `shade_back`.
+    /// The shading normal (a smooth mesh's interpolated one, else the geometric normal), on the
+    /// side the ray arrived from (flipped with the geometric normal when `shade_back`).
     pub normal: Vec3,
+    /// The geometric normal on the side the ray arrived from: it decides whether a light is
+    /// above the surface and keeps mirror and refracted rays on their side of it.
+    pub geometric: Vec3,
     /// True when the ray arrived from the side the geometric normal points to.
     pub front: bool,
     /// The material's parameters at the point (textures interpolated: the ambient term,
@@ -75,9 +83,22 @@ pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Opti
     }
     let point = ray.at(hit.t);
     let material = scene.phong_at(hit.material, point);
+    let geometric = if front { hit.normal } else { -hit.normal };
+    // Corner normals that disagree with the winding still shade the side the ray hit.
+    let shading = if hit.shading.dot(geometric) < 0.0 {
+        -hit.shading
+    } else {
+        hit.shading
+    };
+    let normal = if hit.shading == hit.normal {
+        geometric
+    } else {
+        shading
+    };
     Some(Surface {
         point,
-        normal: if front { hit.normal } else { -hit.normal },
+        normal,
+        geometric,
         front,
         material,
         material_index: hit.material,
@@ -130,6 +151,11 @@ pub fn light_sample(
     opts: &ShadeOptions,
 ) -> Option<LightSample> {
     let ill = light.illuminate(s.point);
+    // A light below the geometric surface is blocked by the surface itself, whatever the
+    // shading normal says (with shadows, the shadow ray would hit the mesh).
+    if s.geometric.dot(ill.dir) <= 0.0 {
+        return None;
+    }
     let mut color = Vec3::ZERO;
     scene.for_each_layer(s.material_index, s.point, &mut |m, w| {
         color += w * phong(m, dir, s.normal, ill.dir, ill.color, opts.specular_fix);
@@ -181,9 +207,19 @@ pub fn scatter(
         } else {
             (-geometric, m.ior, 1.0)
         };
-        refracted = refract(dir, n, n_i / n_t);
+        // Bent by the shading normal (on the arrival side), unless that would send the ray
+        // back out of the geometric surface.
+        let ns = if s.normal.dot(n) < 0.0 {
+            -s.normal
+        } else {
+            s.normal
+        };
+        refracted = match refract(dir, ns, n_i / n_t) {
+            Some(t) if t.dot(n) >= 0.0 => refract(dir, n, n_i / n_t),
+            bent => bent,
+        };
         if opts.fresnel {
-            let f = schlick(-dir.normalize().dot(n), n_i, n_t);
+            let f = schlick(-dir.normalize().dot(ns), n_i, n_t);
             reflective += transparent * f;
             transparent *= 1.0 - f;
         }
@@ -196,7 +232,12 @@ pub fn scatter(
             weight: w,
         })
     };
-    let mirror = child(reflective, reflect(dir, s.normal).normalize());
+    // Mirrored about the shading normal, unless that would send the ray into the surface.
+    let mut mirrored = reflect(dir, s.normal);
+    if mirrored.dot(s.geometric) < 0.0 {
+        mirrored = reflect(dir, s.geometric);
+    }
+    let mirror = child(reflective, mirrored.normalize());
     let transmitted = refracted.and_then(|t| child(transparent, t));
     [mirror, transmitted]
 }

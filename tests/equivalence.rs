@@ -3,7 +3,8 @@
 //! rounding: the packet tracer bakes transforms into world space and sums a pixel's terms in
 //! another order). Checked on every scene of `scenes/`, on every A1-A4 course command (colour,
 //! depth and normal images), on every scene file of assignments 5-7 (meshes up to 40k
-//! triangles, solid textures), and on at least 100 seeded random scenes per run.
+//! triangles, solid textures), and on at least 100 seeded random scenes per run (meshes with
+//! vertex normals and without, some smoothed by `--smooth-normals`; colour and normal images).
 
 mod common;
 
@@ -317,7 +318,8 @@ fn random_scenes_render_the_same_with_both_tracers() {
     for seed in 0..120u64 {
         let mut rng = Rng::new(seed);
         let text = random_scene(&mut rng);
-        let scene = match Scene::from_str(&text, &scenes_dir.join(format!("random{seed}.txt"))) {
+        let mut scene = match Scene::from_str(&text, &scenes_dir.join(format!("random{seed}.txt")))
+        {
             Ok(s) => s,
             // A random triangle can come out degenerate: the parser rejects it, skip that seed.
             Err(e) if e.to_string().contains("degenerate") => continue,
@@ -332,6 +334,11 @@ fn random_scenes_render_the_same_with_both_tracers() {
             transparent_shadows: rng.chance(0.3),
             fresnel: rng.chance(0.3),
         };
+        // torus.obj has vertex normals, cube.obj none: smoothing gives the cubes some.
+        let smooth = rng.chance(0.3);
+        if smooth {
+            scene.smooth_normals();
+        }
         let opts = RenderOptions {
             width: 64,
             height: 48,
@@ -339,10 +346,11 @@ fn random_scenes_render_the_same_with_both_tracers() {
             ..RenderOptions::default()
         };
         let (r, p) = render_both(&scene, &opts);
-        let what = format!("seed {seed} {shade:?}\n{text}");
+        let what = format!("seed {seed} {shade:?} smooth normals {smooth}\n{text}");
         assert_finite(&r, &what);
         assert_finite(&p, &what);
         let d = assert_equivalent(&color_image(&r), &color_image(&p), &what);
+        assert_equivalent(&normal_image(&r), &normal_image(&p), &what);
         rendered += 1;
         if d.fraction_over() >= worst.0 {
             worst = (d.fraction_over(), seed);

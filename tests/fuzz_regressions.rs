@@ -21,7 +21,10 @@ use whitted::shade::ShadeOptions;
 /// Returns the message.
 fn parse_obj_refused(text: &str) -> String {
     match whitted::scene::obj::parse_obj(text, Path::new("fuzz.obj")) {
-        Ok(triangles) => panic!("expected an error, parsed {} triangles", triangles.len()),
+        Ok(mesh) => panic!(
+            "expected an error, parsed {} triangles",
+            mesh.triangles.len()
+        ),
         Err(e) => e.to_string(),
     }
 }

@@ -45,7 +45,10 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     }
     let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
-    let scene = Scene::load(&cmd.scene)?;
+    let mut scene = Scene::load(&cmd.scene)?;
+    if cmd.smooth_normals {
+        scene.smooth_normals();
+    }
     phases.push(("parse", t0.elapsed()));
     if outputs.is_empty() && cmd.ray_tree.is_none() {
         eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");

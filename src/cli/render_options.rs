@@ -26,6 +26,8 @@ pub struct Command {
     pub ray_tree_image: Option<PathBuf>,
     /// Where the witness camera of the picture stands.
     pub witness: WitnessSpec,
+    /// `--smooth-normals`: give meshes without normals area-weighted vertex normals.
+    pub smooth_normals: bool,
     /// `--grid NX NY NZ`: the course's grid, cells per axis.
     pub grid: Option<[u32; 3]>,
     /// `--visualize-grid` or `--visualize-grid-count`, with the spelling typed (for errors).
@@ -53,6 +55,7 @@ impl Command {
             ray_tree: None,
             ray_tree_image: None,
             witness: WitnessSpec::default(),
+            smooth_normals: false,
             grid: None,
             grid_view: None,
             max_grid_cells: options::DEFAULT_MAX_GRID_CELLS,
@@ -264,6 +267,19 @@ pub static OPTIONS: Table<Command> = Table {
             help: "Schlick Fresnel split of transparent colour [off]",
             apply: |c, _| {
                 c.render.shade.fresnel = true;
+                Ok(())
+            },
+        },
+        Opt {
+            long: "--smooth-normals",
+            course: "",
+            short: "",
+            values: &[],
+            section: RENDERING,
+            help: "shade meshes without vertex normals (`vn`) smoothly, with area-weighted \
+                   vertex normals [off: flat; meshes with vn are always smooth]",
+            apply: |c, _| {
+                c.smooth_normals = true;
                 Ok(())
             },
         },

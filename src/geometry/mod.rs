@@ -16,6 +16,7 @@
 //! primitives (planes are tested apart), reorders the arrays so each leaf is a contiguous range
 //! of one kind, and hands the BVH the leaf test as a closure over a range of geometry indices.
 
+pub mod normals;
 pub mod soa;
 
 use crate::bvh::{self, Aabb, Bvh};
@@ -25,10 +26,12 @@ use crate::intersect::{
     intersect_transformed_sphere, intersect_transformed_sphere_packet, intersect_triangle,
     intersect_triangle_packet,
 };
-use crate::math::{Mat3, Mat4, Ray, Vec3};
+use crate::math::{Mat3, Mat4, Ray, Vec3, barycentrics};
 use crate::packet::{HitPacket, RayPacket};
+use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
 use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32};
+use normals::CornerNormals;
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 use std::ops::Range;
 
@@ -48,6 +51,8 @@ pub struct Geometry {
     pub spheres: SphereSoa,
     pub transformed: TransformedSphereSoa,
     pub planes: PlaneSoa,
+    /// Corner normals of smooth mesh triangles, by scene id (outside the kernels' data).
+    pub corner_normals: CornerNormals,
     /// Over the bounded primitives; empty until [`Geometry::build_bvh`].
     bvh: Bvh,
 }
@@ -100,12 +105,17 @@ impl Geometry {
     /// The surface hit by `ray` at `t` on primitive `prim`: unit world normal, material, scene id.
     pub fn surface(&self, prim: u32, ray: &Ray, t: f32) -> Hit {
         let (kind, i) = self.locate(prim);
+        let mut shading = None;
         let (normal, material, id) = match kind {
-            PrimKind::Triangle => (
-                self.triangles.normal(i),
-                self.triangles.material[i],
-                self.triangles.id[i],
-            ),
+            PrimKind::Triangle => {
+                let (normal, id) = (self.triangles.normal(i), self.triangles.id[i]);
+                if let Some(corners) = self.corner_normals.get(id) {
+                    let (v0, e1, e2) = self.triangles.get(i);
+                    let (u, v) = barycentrics(v0, e1, e2, ray);
+                    shading = Some(interpolate(corners, u, v, normal));
+                }
+                (normal, self.triangles.material[i], id)
+            }
             PrimKind::Sphere => (
                 // A ray through the very centre of a tiny sphere: face the ray (as the
                 // reference tracer does).
@@ -137,6 +147,7 @@ impl Geometry {
         Hit {
             t,
             normal,
+            shading: shading.unwrap_or(normal),
             material,
             prim: id,
         }
@@ -526,11 +537,21 @@ fn flatten(obj: &Object, m: &Mat4, n: &Mat3, identity: bool, g: &mut Geometry) {
         }
         Object::Mesh {
             triangles,
+            normals,
             material,
             first_id,
         } => {
             for (k, v) in triangles.iter().enumerate() {
-                push_triangle(g, v, m, identity, &normal, *material, first_id + k as u32);
+                let id = first_id + k as u32;
+                push_triangle(g, v, m, identity, &normal, *material, id);
+                if let Some(corners) = normals.get(k) {
+                    let world = if identity {
+                        *corners
+                    } else {
+                        corners.map(|c| *n * c)
+                    };
+                    g.corner_normals.push(id, world);
+                }
             }
         }
         Object::Group(children) => {

@@ -22,8 +22,12 @@ use crate::math::Vec3;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
-    /// Unit geometric normal, as the primitive defines it (not flipped towards the ray).
+    /// Unit geometric normal, as the primitive defines it (not flipped towards the ray): it
+    /// decides the side a ray hits.
     pub normal: Vec3,
+    /// Unit shading normal, on the same side as `normal`'s definition: the mesh's corner
+    /// normals interpolated at the hit for a smooth mesh, else `normal` itself.
+    pub shading: Vec3,
     pub material: u32,
     /// The primitive's id (see [`crate::scene::Object`]).
     pub prim: u32,

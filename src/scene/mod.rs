@@ -14,6 +14,7 @@ mod blocks;
 pub mod camera;
 mod cursor;
 mod input;
+pub mod normals;
 pub mod obj;
 pub mod parse;
 mod passes;
@@ -169,6 +170,9 @@ pub enum Object {
     /// An OBJ mesh: its triangles, all of one material; triangle `k` has id `first_id + k`.
     Mesh {
         triangles: Vec<[Vec3; 3]>,
+        /// Unit corner normals of each triangle for smooth shading (see [`normals`]), parallel
+        /// to `triangles`; empty for a flat mesh.
+        normals: Vec<[Vec3; 3]>,
         material: u32,
         first_id: u32,
     },

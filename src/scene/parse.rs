@@ -428,16 +428,18 @@ impl<'a> Parser<'a> {
                 let file = self.cur.next("an OBJ file name")?;
                 self.cur.keyword("}")?;
                 let path = self.resolve(file.text);
-                let triangles = obj::load_obj(&path).map_err(|e| match e {
-                    Error::Io { source, .. } => self.cur.error_at(
-                        Some(&file),
-                        format!("cannot read OBJ file `{}`: {source}", path.display()),
-                    ),
-                    other => other,
-                })?;
+                let obj::ObjMesh { triangles, normals } =
+                    obj::load_obj(&path).map_err(|e| match e {
+                        Error::Io { source, .. } => self.cur.error_at(
+                            Some(&file),
+                            format!("cannot read OBJ file `{}`: {source}", path.display()),
+                        ),
+                        other => other,
+                    })?;
                 let first_id = self.take_ids(triangles.len())?;
                 Ok(Object::Mesh {
                     triangles,
+                    normals,
                     material,
                     first_id,
                 })

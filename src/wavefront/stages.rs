@@ -99,7 +99,7 @@ pub fn shade_hits(
         };
         if bounce == 0 {
             out.depth[px] = hit.t;
-            out.normal[px] = hit.normal;
+            out.normal[px] = hit.shading;
         }
         let Some(s) = shade::surface(scene, &ray, &hit, ctx.opts) else {
             continue;

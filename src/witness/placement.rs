@@ -239,6 +239,7 @@ mod tests {
         let hit = crate::intersect::Hit {
             t: 5.0,
             normal: Vec3::Z,
+            shading: Vec3::Z,
             material: 0,
             prim: 0,
         };
