@@ -1,7 +1,8 @@
 //! The [`Frame`] a render fills: linear colour per pixel, plus the primary hit's distance and
 //! normal (for the depth and normal images) and what the render cost (rays cast, the packet
 //! tracer's BVH and time per bounce). A leaf of the data flow: both tracers write frames,
-//! `output.rs` turns them into image files, `witness/` draws over them.
+//! `output.rs` turns them into image files, `witness/` draws over them. Beside it, the
+//! [`CostMap`] the packet tracer's counting pass fills for `--heatmap`.
 
 use std::time::Duration;
 
@@ -61,5 +62,27 @@ impl Frame {
             bounce_time: Vec::new(),
             grid: None,
         }
+    }
+}
+
+/// The eye-ray cost of every pixel, rows top to bottom.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CostMap {
+    pub width: u32,
+    pub height: u32,
+    /// Nodes visited plus primitives tested, per pixel.
+    pub cost: Vec<u32>,
+}
+
+impl CostMap {
+    /// The most expensive pixel `(x, y)` and its cost (the first, in reading order, on ties).
+    pub fn max(&self) -> ((u32, u32), u32) {
+        let (i, c) =
+            self.cost.iter().enumerate().fold(
+                (0, 0),
+                |best, (i, &c)| if c > best.1 { (i, c) } else { best },
+            );
+        let w = self.width.max(1) as usize;
+        (((i % w) as u32, (i / w) as u32), c)
     }
 }

@@ -48,6 +48,8 @@
 //!
 //! one pixel again --render::trace_ray_tree--> raytree.rs: RayTree --> JSON
 //!                                        '--> witness/: witness camera render + overlay -> PNG
+//! eye rays again --render::eye_ray_costs--> CostMap (nodes + primitives per pixel)
+//!                                        '--> heatmap.rs: colour map + legend -> PNG
 //! stats.rs: RayCounts (filled by the tracers) + phase times -> --stats; progress.rs: the bar
 //! ```
 //!
@@ -64,7 +66,8 @@
 //! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH),
 //!              grid (the course's uniform grid and its picture)
 //! tracers      reference (recursive), wavefront (queues and packets)
-//! front door   render (threads, picks a tracer), output (files), witness (ray-tree picture)
+//! front door   render (threads, picks a tracer), output (files), witness (ray-tree picture),
+//!              heatmap (eye-ray cost picture, drawn with witness's canvas)
 //! commands     bench, cli (main.rs calls cli::run)
 //! ```
 //!
@@ -85,6 +88,7 @@ pub mod frame;
 pub mod geometry;
 #[doc(hidden)]
 pub mod grid;
+pub mod heatmap;
 #[doc(hidden)]
 pub mod intersect;
 pub mod math;
@@ -109,7 +113,7 @@ pub mod wavefront;
 pub mod witness;
 
 pub use error::{Error, Result};
-pub use frame::Frame;
+pub use frame::{CostMap, Frame};
 pub use options::{RenderOptions, Tracer};
 pub use render::render;
 pub use scene::Scene;

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use crate::error::{Error, Result};
-use crate::frame::Frame;
+use crate::frame::{CostMap, Frame};
 use crate::geometry::Geometry;
 use crate::grid::Grid;
 use crate::math::Vec3;
@@ -86,6 +86,19 @@ fn render_scene(
             Ok(frame)
         }
     }
+}
+
+/// The traversal cost of every pixel's eye ray in the packet tracer (BVH nodes entered plus
+/// primitives tested), for `--heatmap`; whatever `opts.tracer` says, the packet tracer's BVH
+/// is what it measures.
+pub fn eye_ray_costs(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Result<CostMap> {
+    check_options(opts)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.threads)
+        .build()
+        .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
+    let geometry = Geometry::from_scene(scene);
+    Ok(pool.install(|| crate::wavefront::eye_ray_costs(scene, &geometry, opts, progress)))
 }
 
 /// Traces pixel `(x, y)` of the frame `opts` describes once more, recording its ray tree (the

@@ -7,7 +7,9 @@
 //! Traversals: [`Bvh::closest_packet`] and [`Bvh::occluded_packet`] walk 8 rays at once (per-lane
 //! entry distances, culling of subtrees no active lane can reach nearer than its current hit,
 //! nearer child first by lane vote, any-hit stops when every lane is occluded);
-//! [`Bvh::closest`] and [`Bvh::occluded`] walk a single ray.
+//! [`Bvh::closest`] and [`Bvh::occluded`] walk a single ray. [`Bvh::closest_packet_probed`]
+//! is the closest-hit packet walk reporting each node it visits to a [`TraversalProbe`] (the
+//! cost heatmap's counter; the ordinary walk passes [`NoProbe`], which compiles away).
 
 pub mod build;
 
@@ -266,6 +268,20 @@ impl Pending {
     }
 }
 
+/// Told of every node a packet traversal visits, with the lanes that entered it (culled lanes
+/// excluded): the hook behind the cost heatmap. Monomorphised, so [`NoProbe`] costs nothing.
+pub trait TraversalProbe {
+    fn node(&mut self, lanes: Mask);
+}
+
+/// The probe of ordinary traversals: does nothing.
+pub struct NoProbe;
+
+impl TraversalProbe for NoProbe {
+    #[inline(always)]
+    fn node(&mut self, _lanes: Mask) {}
+}
+
 impl Bvh {
     /// True when the tree has no node.
     pub fn is_empty(&self) -> bool {
@@ -333,7 +349,19 @@ impl Bvh {
         &self,
         rays: &RayPacket,
         tmax: &mut F32x8,
+        leaf: impl FnMut(Range<u32>, &RayPacket, &mut F32x8),
+    ) {
+        self.closest_packet_probed(rays, tmax, leaf, &mut NoProbe);
+    }
+
+    /// [`Bvh::closest_packet`] reporting every node it visits to `probe`, with the lanes that
+    /// entered it (the cost heatmap counts them); with [`NoProbe`] it is `closest_packet`.
+    pub fn closest_packet_probed(
+        &self,
+        rays: &RayPacket,
+        tmax: &mut F32x8,
         mut leaf: impl FnMut(Range<u32>, &RayPacket, &mut F32x8),
+        probe: &mut impl TraversalProbe,
     ) {
         if self.nodes.is_empty() || !any(rays.active) {
             return;
@@ -355,6 +383,7 @@ impl Bvh {
                 }
                 loop {
                     let n = &self.nodes[node as usize];
+                    probe.node(lanes);
                     if n.is_leaf() {
                         local.active = lanes;
                         leaf(n.prims(), &local, tmax);

@@ -1,12 +1,13 @@
 //! Running a parsed `whitted render` command: load the scene, render (with a progress bar on
-//! a terminal), write the images, then the optional ray tree of one pixel and its witness
-//! picture, then `--stats`. Reads the [`Command`] of `render.rs`.
+//! a terminal), write the images, then the optional heatmap, the optional ray tree of one pixel
+//! and its witness picture, then `--stats`. Reads the [`Command`] of `render.rs`.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::render_options::Command;
 use crate::error::Result;
+use crate::heatmap;
 use crate::options;
 use crate::output;
 use crate::progress::RowBar;
@@ -40,6 +41,9 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     for out in outputs.iter().chain(cmd.ray_tree_image.as_deref().iter()) {
         output::check_writable(out, w, h)?;
     }
+    if let Some(out) = &cmd.heatmap {
+        output::check_writable(out, w, h + heatmap::legend_height(w))?;
+    }
     if let Some((_, _, json)) = &cmd.ray_tree {
         output::check_creatable(json, "write ray tree")?;
     }
@@ -50,7 +54,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         scene.smooth_normals();
     }
     phases.push(("parse", t0.elapsed()));
-    if outputs.is_empty() && cmd.ray_tree.is_none() {
+    if outputs.is_empty() && cmd.ray_tree.is_none() && cmd.heatmap.is_none() {
         eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");
         return Ok(());
     }
@@ -77,6 +81,11 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         accel = frame.accel;
         bounce_time = frame.bounce_time;
         grid = frame.grid;
+    }
+    if let Some(out) = &cmd.heatmap {
+        let t4 = Instant::now();
+        write_heatmap(&cmd, &scene, out)?;
+        phases.push(("heatmap", t4.elapsed()));
     }
     if let Some((x, y, json)) = &cmd.ray_tree {
         let t3 = Instant::now();
@@ -105,6 +114,22 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         eprint!("{}", report.human());
         eprintln!("{}", report.line());
     }
+    Ok(())
+}
+
+/// Traces the eye rays again counting their traversal work, writes the heatmap to `out` and
+/// prints its maximum.
+fn write_heatmap(cmd: &Command, scene: &Scene, out: &Path) -> Result<()> {
+    let bar = RowBar::new("heatmap", cmd.render.height);
+    let costs = render::eye_ray_costs(scene, &cmd.render, &|rows| bar.rows_done(rows))?;
+    bar.finish();
+    output::write_image(&heatmap::draw_heatmap(&costs), out)?;
+    let ((x, y), max) = costs.max();
+    let mean = costs.cost.iter().map(|&c| c as f64).sum::<f64>() / costs.cost.len() as f64;
+    eprintln!(
+        "heatmap: eye-ray cost (BVH nodes entered + primitives tested) at most {max}, at pixel \
+         ({x}, {y}); mean {mean:.1}"
+    );
     Ok(())
 }
 

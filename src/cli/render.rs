@@ -100,9 +100,11 @@ fn check(cmd: &Command, modern: bool) -> Result<()> {
         && cmd.depth.is_none()
         && cmd.normals.is_none()
         && cmd.ray_tree.is_none()
+        && cmd.heatmap.is_none()
     {
         return Err(Error::Usage(
-            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree)".to_string(),
+            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree/--heatmap)"
+                .to_string(),
         ));
     }
     if cmd.ray_tree_image.is_some() && cmd.ray_tree.is_none() {
@@ -125,6 +127,7 @@ fn check_distinct_outputs(cmd: &Command, course_style: bool) -> Result<()> {
         ("--normals", cmd.normals.as_deref()),
         ("--ray-tree", cmd.ray_tree.as_ref().map(|r| r.2.as_path())),
         ("--ray-tree-image", cmd.ray_tree_image.as_deref()),
+        ("--heatmap", cmd.heatmap.as_deref()),
     ]
     .into_iter()
     .filter_map(|(option, path)| {

@@ -26,6 +26,8 @@ pub struct Command {
     pub ray_tree_image: Option<PathBuf>,
     /// Where the witness camera of the picture stands.
     pub witness: WitnessSpec,
+    /// `--heatmap FILE`: the eye rays' traversal cost picture.
+    pub heatmap: Option<PathBuf>,
     /// `--smooth-normals`: give meshes without normals area-weighted vertex normals.
     pub smooth_normals: bool,
     /// `--grid NX NY NZ`: the course's grid, cells per axis.
@@ -55,6 +57,7 @@ impl Command {
             ray_tree: None,
             ray_tree_image: None,
             witness: WitnessSpec::default(),
+            heatmap: None,
             smooth_normals: false,
             grid: None,
             grid_view: None,
@@ -156,6 +159,20 @@ pub static OPTIONS: Table<Command> = Table {
             help: "normal image: abs(normal) as RGB",
             apply: |c, v| {
                 c.normals = Some(v.path()?);
+                Ok(())
+            },
+        },
+        Opt {
+            long: "--heatmap",
+            course: "",
+            short: "",
+            values: &[("FILE", "a file name")],
+            section: FILES,
+            help: "the packet tracer's cost per eye ray (BVH nodes entered plus primitives \
+                   tested) as a colour map, black (0) to pale yellow (the maximum), with its \
+                   scale in a strip below; the maximum and its pixel are printed on stderr",
+            apply: |c, v| {
+                c.heatmap = Some(v.path()?);
                 Ok(())
             },
         },

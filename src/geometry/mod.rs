@@ -19,7 +19,7 @@
 pub mod normals;
 pub mod soa;
 
-use crate::bvh::{self, Aabb, Bvh};
+use crate::bvh::{self, Aabb, Bvh, TraversalProbe};
 use crate::intersect::sphere::{affine_point, affine_vector};
 use crate::intersect::{
     Hit, intersect_plane, intersect_plane_packet, intersect_sphere, intersect_sphere_packet,
@@ -30,7 +30,7 @@ use crate::math::{Mat3, Mat4, Ray, Vec3, barycentrics};
 use crate::packet::{HitPacket, RayPacket};
 use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
-use crate::simd::{F32x8, I32x8, Mask, all, any, mask_none, select, select_i32};
+use crate::simd::{F32x8, I32x8, LANES, Mask, all, any, bitmask, mask_none, select, select_i32};
 use normals::CornerNormals;
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 use std::ops::Range;
@@ -282,6 +282,34 @@ impl Geometry {
         self.closest_in_packet(self.planes_range(), rays, t, prim);
     }
 
+    /// [`Geometry::closest_hit_packet`] that also adds to `cost` each lane's traversal work:
+    /// BVH nodes it entered plus primitives tested for it (planes included). The heatmap's
+    /// counter; the same traversal, in the same order, as the render's.
+    pub fn closest_hit_packet_counted(
+        &self,
+        rays: &RayPacket,
+        hit: &mut HitPacket,
+        cost: &mut [u32; LANES],
+    ) {
+        let (mut nodes, mut prims) = (LaneCounter::default(), LaneCounter::default());
+        let HitPacket { t, prim } = hit;
+        if self.bvh.is_empty() {
+            prims.add(rays.active, self.plane_base() as u32);
+            self.closest_in_packet(self.bounded_range(), rays, t, prim);
+        } else {
+            let leaf = |range: Range<u32>, rays: &RayPacket, t: &mut F32x8| {
+                prims.add(rays.active, range.len() as u32);
+                self.closest_in_packet(range, rays, t, prim);
+            };
+            self.bvh.closest_packet_probed(rays, t, leaf, &mut nodes);
+        }
+        prims.add(rays.active, self.planes.len() as u32);
+        self.closest_in_packet(self.planes_range(), rays, t, prim);
+        for (lane, c) in cost.iter_mut().enumerate() {
+            *c += nodes.0[lane] + prims.0[lane];
+        }
+    }
+
     /// True if anything lies on the ray in `(tmin, tmax)`.
     pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
         let leaf = |range: Range<u32>| self.occluded_in(range, ray, tmin, tmax);
@@ -470,6 +498,28 @@ impl Geometry {
             }
         });
         occluded
+    }
+}
+
+/// Counts per lane, for the heatmap: the BVH's probe (one per node a lane enters) and the
+/// primitive tests of the leaves a lane reaches.
+#[derive(Default)]
+struct LaneCounter([u32; LANES]);
+
+impl LaneCounter {
+    fn add(&mut self, lanes: Mask, n: u32) {
+        let bits = bitmask(lanes);
+        for (lane, c) in self.0.iter_mut().enumerate() {
+            if bits >> lane & 1 == 1 {
+                *c += n;
+            }
+        }
+    }
+}
+
+impl TraversalProbe for LaneCounter {
+    fn node(&mut self, lanes: Mask) {
+        self.add(lanes, 1);
     }
 }
 

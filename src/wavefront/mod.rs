@@ -14,6 +14,7 @@
 //! in a scratch arena reset at every bounce.
 
 mod grid;
+mod heatmap;
 pub mod queue;
 mod stages;
 
@@ -32,6 +33,7 @@ use crate::scene::Scene;
 use crate::shade::ShadeOptions;
 use crate::stats::RayCounts;
 pub use grid::render_grid_packet;
+pub use heatmap::eye_ray_costs;
 use queue::RayQueue;
 use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 

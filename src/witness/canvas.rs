@@ -15,9 +15,9 @@ use crate::math::Vec3;
 use crate::output::{Rgb8, color_image};
 
 /// Display-space RGB canvas with the witness frame's depths for the hidden-part test.
-pub(super) struct Canvas<'f> {
-    pub(super) width: usize,
-    pub(super) height: usize,
+pub(crate) struct Canvas<'f> {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
     rgb: Vec<[f32; 3]>,
     frame: &'f Frame,
 }
@@ -36,7 +36,7 @@ const HIDDEN_ALPHA: f32 = 0.35;
 
 impl Canvas<'_> {
     /// A canvas holding `frame`'s colour image, as the PNG would store it.
-    pub(super) fn new(frame: &Frame) -> Canvas<'_> {
+    pub(crate) fn new(frame: &Frame) -> Canvas<'_> {
         let img = color_image(frame);
         Canvas {
             width: frame.width as usize,
@@ -57,7 +57,7 @@ impl Canvas<'_> {
     }
 
     /// The finished picture, rounded to bytes.
-    pub(super) fn into_image(self) -> Rgb8 {
+    pub(crate) fn into_image(self) -> Rgb8 {
         let data = (self.rgb.iter().flatten())
             .map(|&c| (c * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
             .collect();
@@ -196,7 +196,7 @@ impl Canvas<'_> {
     }
 
     /// A filled rectangle.
-    pub(super) fn rect(
+    pub(crate) fn rect(
         &mut self,
         x: usize,
         y: usize,
@@ -213,7 +213,7 @@ impl Canvas<'_> {
     }
 
     /// Text in the built-in 5x7 font, `scale` pixels per font pixel, top-left at `(x, y)`.
-    pub(super) fn text(&mut self, x: usize, y: usize, scale: usize, s: &str, color: [f32; 3]) {
+    pub(crate) fn text(&mut self, x: usize, y: usize, scale: usize, s: &str, color: [f32; 3]) {
         for (k, ch) in s.chars().enumerate() {
             let Some(rows) = glyph(ch) else {
                 continue;

@@ -1,5 +1,5 @@
 //! The witness picture's bitmap font: a 5x7 glyph per lower-case letter, digit and the few
-//! punctuation marks the title and legend use. The lowest file of `witness/`: it knows nothing
+//! punctuation marks the title and legend use (and the heatmap's legend, `heatmap.rs`). The lowest file of `witness/`: it knows nothing
 //! else; `canvas.rs` stamps its glyphs as text, `overlay.rs` writes the title and legend with it.
 //!
 //! ```text
@@ -151,6 +151,9 @@ pub(super) fn glyph(c: char) -> Option<[&'static str; 7]> {
         ],
         '=' => [
             ".....", ".....", "#####", ".....", "#####", ".....", ".....",
+        ],
+        '+' => [
+            ".....", "..#..", "..#..", "#####", "..#..", "..#..", ".....",
         ],
         ' ' => [
             ".....", ".....", ".....", ".....", ".....", ".....", ".....",

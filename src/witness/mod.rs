@@ -35,7 +35,8 @@
 //! overlay.rs     draw_ray_tree: camera, segments, ends, legend       (all of the above)
 //! ```
 
-mod canvas;
+// The heatmap's legend (`crate::heatmap`) draws with the same canvas and font.
+pub(crate) mod canvas;
 mod font;
 mod overlay;
 mod placement;
