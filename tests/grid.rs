@@ -186,3 +186,107 @@ fn both_tracers_draw_the_same_grid_pictures() {
         assert_eq!(r.grid.unwrap().cells, [13, 9, 7]);
     }
 }
+
+#[test]
+fn the_command_line_builds_the_grid_reports_it_and_draws_it() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = common::scratch_dir("grid_cli");
+    let out = dir.join("g.png");
+    let out = out.to_str().unwrap();
+    // -grid alone: the normal render (the same bytes as without it), the grid in --stats.
+    let plain = dir.join("plain.png");
+    let run = common::whitted(
+        root,
+        &[
+            "render",
+            "scenes/glass_sphere.txt",
+            "-o",
+            plain.to_str().unwrap(),
+            "--size",
+            "48",
+            "32",
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let run = common::whitted(
+        root,
+        &[
+            "-input",
+            "scenes/glass_sphere.txt",
+            "-size",
+            "48",
+            "32",
+            "-output",
+            out,
+            "-grid",
+            "10",
+            "10",
+            "10",
+            "-stats",
+            "--specular-fix",
+        ],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    assert_eq!(std::fs::read(out).unwrap(), std::fs::read(&plain).unwrap());
+    let line = run
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("stats:"))
+        .unwrap();
+    assert!(
+        line.contains(" grid=10x10x10 grid_cells=1000 grid_occupied="),
+        "{line}"
+    );
+    assert!(
+        run.stderr
+            .contains("  grid     10x10x10 = 1,000 cells over "),
+        "{}",
+        run.stderr
+    );
+    // The picture, in both spellings and both views; the two views differ.
+    let draw = |args: &[&str], file: &str| {
+        let path = dir.join(file);
+        let mut all = vec![
+            "render",
+            "scenes/glass_sphere.txt",
+            "-o",
+            path.to_str().unwrap(),
+        ];
+        all.extend_from_slice(&["--size", "48", "32"]);
+        all.extend_from_slice(args);
+        let run = common::whitted(root, &all);
+        assert_eq!(run.code, Some(0), "{}", run.stderr);
+        std::fs::read(path).unwrap()
+    };
+    let lit = draw(&["--grid", "6", "6", "6", "--visualize-grid"], "lit.png");
+    assert_eq!(
+        lit,
+        draw(&["-grid", "6", "6", "6", "-visualize_grid"], "lit2.png")
+    );
+    let count = draw(
+        &["--grid", "6", "6", "6", "--visualize-grid-count"],
+        "count.png",
+    );
+    assert_ne!(lit, count);
+    assert_ne!(lit, std::fs::read(&plain).unwrap());
+    // Asking for a picture without a grid, or an empty or oversized grid, is a usage error.
+    for (args, start) in [
+        (
+            vec!["--visualize-grid"],
+            "option --visualize-grid needs -grid NX NY NZ",
+        ),
+        (
+            vec!["--grid", "0", "4", "4"],
+            "grid 0x4x4: expected at least 1 cell",
+        ),
+        (
+            vec!["--grid", "300", "300", "300"],
+            "grid 300x300x300 has 27000000 cells, over the limit of 16777216 (raise it \
+             with --max-grid-cells N)",
+        ),
+    ] {
+        let mut all = vec!["render", "scenes/glass_sphere.txt", "-o", out];
+        all.extend_from_slice(&args);
+        common::whitted(root, &all).assert_error(start);
+    }
+}

@@ -43,9 +43,9 @@ fn scene(cluster: bool, plane: bool) -> Scene {
          Background { color 0 0 0 }
          Materials { numMaterials 1 PhongMaterial { diffuseColor 1 1 1 } }\n",
     );
-    let _ = write!(
+    let _ = writeln!(
         text,
-        "Group {{ numObjects {} MaterialIndex 0\n",
+        "Group {{ numObjects {} MaterialIndex 0",
         objects.len()
     );
     text += &objects.join("\n");
