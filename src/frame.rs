@@ -7,13 +7,20 @@
 use std::time::Duration;
 
 use crate::math::Vec3;
+use crate::options::Window;
 use crate::stats::{AccelStats, GridStats, RayCounts};
 
-/// A rendered frame, rows top to bottom.
+/// A rendered frame, rows top to bottom: the whole image, or the window of it a crop asked for.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
+    /// The frame's own size (the window's).
     pub width: u32,
     pub height: u32,
+    /// Where the frame lies in the full image (all of it unless cropped).
+    pub window: Window,
+    /// The full image's size.
+    pub image_width: u32,
+    pub image_height: u32,
     /// Linear RGB per pixel.
     pub color: Vec<Vec3>,
     /// Distance along the primary ray to the first hit; `+inf` where nothing was hit.
@@ -48,12 +55,21 @@ impl Frame {
             .map(|i| ((i % w) as u32, (i / w) as u32))
     }
 
-    /// A black frame with no hits.
+    /// A black frame with no hits, the whole of a `width` x `height` image.
     pub fn new(width: u32, height: u32) -> Frame {
+        Frame::window(Window::full(width, height), width, height)
+    }
+
+    /// A black frame with no hits for `window` of a `image_width` x `image_height` image.
+    pub fn window(window: Window, image_width: u32, image_height: u32) -> Frame {
+        let (width, height) = (window.width(), window.height());
         let n = width as usize * height as usize;
         Frame {
             width,
             height,
+            window,
+            image_width,
+            image_height,
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],

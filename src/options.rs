@@ -1,7 +1,8 @@
 //! What a render is asked to do and the checks made before anything is allocated: the
-//! [`RenderOptions`] (size, shading switches, tracer, threads, limits), the [`Tracer`] choice,
-//! the [`Progress`] hook, and the limits with the flags that lift them. A leaf shared by the
-//! command line, `render.rs` and both tracers' frame loops.
+//! [`RenderOptions`] (size, crop window, shading switches, tracer, threads, limits), the
+//! [`Tracer`] choice, the [`Window`] of the full image a render covers (`--crop`, `--tile`), the
+//! [`Progress`] hook, and the limits with the flags that lift them. A leaf shared by the command
+//! line, `render.rs`, both tracers' frame loops and the tile merge.
 
 use crate::error::{Error, Result};
 use crate::shade::ShadeOptions;
@@ -18,6 +19,10 @@ pub const DEFAULT_MAX_GRID_CELLS: u64 = 1 << 24;
 const STACK_PER_BOUNCE: usize = 8 << 10;
 /// Bytes a frame holds per pixel (colour, depth, normal) plus the 8-bit image made from it.
 const BYTES_PER_PIXEL: u64 = 28 + 3;
+/// `--tile` strips start and end on multiples of this many rows (the last ends at the image's
+/// bottom): a whole number of the packet tracer's bands, so a tile traces exactly the packets
+/// the one-go render traces for its rows.
+pub const TILE_ROW_STEP: u32 = 8;
 
 /// Which tracer renders the frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,16 +73,89 @@ pub struct GridOptions {
     pub max_cells: u64,
 }
 
+/// A window of the full image: columns `x0..x1` and rows `y0..y1` (half-open, x from the left,
+/// y from the top, in the full image's pixel coordinates).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Window {
+    pub x0: u32,
+    pub x1: u32,
+    pub y0: u32,
+    pub y1: u32,
+}
+
+impl Window {
+    /// The whole `width` x `height` image.
+    pub fn full(width: u32, height: u32) -> Window {
+        Window {
+            x0: 0,
+            x1: width,
+            y0: 0,
+            y1: height,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    /// Pixels in the window.
+    pub fn pixels(&self) -> u64 {
+        self.width() as u64 * self.height() as u64
+    }
+
+    /// Tile `index` of `count` (`--tile I/N`) of a `width` x `height` image: a horizontal strip
+    /// of whole rows. The image's rows are grouped in `B = ceil(height / 8)` runs of
+    /// [`TILE_ROW_STEP`] rows (the last may be shorter), and tile `I` takes runs
+    /// `floor(I * B / N)` to `floor((I + 1) * B / N)`: N strips as equal as runs allow, top to
+    /// bottom, each at least one run.
+    pub fn tile(index: u32, count: u32, width: u32, height: u32) -> Result<Window> {
+        let runs = height.div_ceil(TILE_ROW_STEP);
+        if count == 0 || index >= count {
+            return Err(Error::Usage(format!(
+                "option --tile {index}/{count}: expected a tile I/N with 0 <= I < N"
+            )));
+        }
+        if count > runs {
+            return Err(Error::Usage(format!(
+                "option --tile {index}/{count}: a {width}x{height} image has {runs} strips of \
+                 {TILE_ROW_STEP} rows to share, fewer than {count} tiles"
+            )));
+        }
+        let row =
+            |i: u32| ((i as u64 * runs as u64 / count as u64) as u32 * TILE_ROW_STEP).min(height);
+        Ok(Window {
+            x0: 0,
+            x1: width,
+            y0: row(index),
+            y1: row(index + 1),
+        })
+    }
+}
+
+impl std::fmt::Display for Window {
+    /// `X0 X1 Y0 Y1`, as `--crop` takes it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {} {} {}", self.x0, self.x1, self.y0, self.y1)
+    }
+}
+
 /// Everything that decides the pixels of a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
+    /// The full image's size (a crop renders a window of it).
     pub width: u32,
     pub height: u32,
+    /// Render only this window of the full image (`--crop`, `--tile`); `None`: all of it.
+    pub crop: Option<Window>,
     pub shade: ShadeOptions,
     pub tracer: Tracer,
     /// Worker threads; 0 means all cores.
     pub threads: usize,
-    /// Refuse frames with more pixels than this.
+    /// Refuse renders of more pixels than this (a crop counts its window's pixels).
     pub max_pixels: u64,
     /// Refuse bounce counts above this.
     pub max_bounces: u32,
@@ -90,6 +168,7 @@ impl Default for RenderOptions {
         RenderOptions {
             width: 512,
             height: 512,
+            crop: None,
             shade: ShadeOptions::default(),
             tracer: Tracer::Packet,
             threads: 0,
@@ -97,6 +176,14 @@ impl Default for RenderOptions {
             max_bounces: DEFAULT_MAX_BOUNCES,
             grid: None,
         }
+    }
+}
+
+impl RenderOptions {
+    /// The window this render covers: the crop, or the whole image.
+    pub fn window(&self) -> Window {
+        self.crop
+            .unwrap_or_else(|| Window::full(self.width, self.height))
     }
 }
 
@@ -112,11 +199,25 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
             opts.width, opts.height
         )));
     }
-    let pixels = opts.width as u64 * opts.height as u64;
+    if let Some(c) = opts.crop {
+        if !(c.x0 < c.x1 && c.x1 <= opts.width && c.y0 < c.y1 && c.y1 <= opts.height) {
+            return Err(Error::Usage(format!(
+                "option --crop {c}: expected a non-empty window of the {}x{} image, \
+                 0 <= X0 < X1 <= {} and 0 <= Y0 < Y1 <= {}",
+                opts.width, opts.height, opts.width, opts.height
+            )));
+        }
+    }
+    let window = opts.window();
+    let pixels = window.pixels();
     if pixels > opts.max_pixels {
+        let what = match opts.crop {
+            None => format!("image size {}x{}", opts.width, opts.height),
+            Some(c) => format!("crop {}x{}", c.width(), c.height()),
+        };
         return Err(Error::Limit(format!(
-            "image size {}x{} is {pixels} pixels, over the limit of {} (raise it with --max-pixels N)",
-            opts.width, opts.height, opts.max_pixels
+            "{what} is {pixels} pixels, over the limit of {} (raise it with --max-pixels N)",
+            opts.max_pixels
         )));
     }
     if opts.shade.bounces > opts.max_bounces {
@@ -146,8 +247,8 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
     if !fits {
         return Err(Error::Limit(format!(
             "image size {}x{} needs {} MiB, more memory than can be allocated",
-            opts.width,
-            opts.height,
+            window.width(),
+            window.height(),
             (pixels as u128 * BYTES_PER_PIXEL as u128) >> 20
         )));
     }

@@ -212,25 +212,26 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
 }
 
 /// Renders with the reference tracer, rows in parallel; each row counts its rays locally and
-/// the counts are summed at the end.
+/// the counts are summed at the end. Only the rows and columns of `opts.window()` are traced.
 pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Frame {
     let (w, h) = (opts.width, opts.height);
-    let mut frame = Frame::new(w, h);
+    let win = opts.window();
+    let mut frame = Frame::window(win, w, h);
     let tracer = ReferenceTracer::new(scene, opts.shade);
+    let row_len = win.width() as usize;
     frame.rays = frame
         .color
-        .par_chunks_mut(w as usize)
-        .zip(frame.depth.par_chunks_mut(w as usize))
-        .zip(frame.normal.par_chunks_mut(w as usize))
+        .par_chunks_mut(row_len)
+        .zip(frame.depth.par_chunks_mut(row_len))
+        .zip(frame.normal.par_chunks_mut(row_len))
         .enumerate()
-        .map(|(y, ((color, depth), normal))| {
+        .map(|(row, ((color, depth), normal))| {
+            let y = win.y0 + row as u32;
             let mut rays = RayCounts::default();
-            for x in 0..w {
-                let ray = scene
-                    .camera
-                    .generate_ray(Camera::pixel_point(x, y as u32, w, h));
+            for x in win.x0..win.x1 {
+                let ray = scene.camera.generate_ray(Camera::pixel_point(x, y, w, h));
                 let sample = tracer.trace_primary_counted(&ray, None, &mut rays);
-                let i = x as usize;
+                let i = (x - win.x0) as usize;
                 color[i] = sample.color;
                 if let Some(hit) = sample.hit {
                     depth[i] = hit.t;

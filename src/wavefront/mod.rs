@@ -27,7 +27,7 @@ use crate::error::{Error, Result};
 use crate::frame::Frame;
 use crate::geometry::Geometry;
 use crate::math::{Vec3, saturate};
-use crate::options::{Progress, RenderOptions};
+use crate::options::{Progress, RenderOptions, TILE_ROW_STEP, Window};
 use crate::raytree::{RayTree, SegmentKind};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
@@ -39,6 +39,8 @@ use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 
 /// Rows per band: the unit of parallel work (a multiple of the 2-row camera tiles).
 pub const BAND_ROWS: u32 = 8;
+// A `--tile` strip is whole bands, so it traces the packets the one-go render traces.
+const _: () = assert!(TILE_ROW_STEP % BAND_ROWS == 0);
 
 /// What every stage reads: the scene, its flattened geometry, the shading options.
 pub struct Context<'s> {
@@ -59,8 +61,9 @@ pub struct BandOutput<'f> {
     pub tree: Option<&'f mut RayTree>,
 }
 
-/// A rectangle of pixels to render: columns `0..width` of rows `y0..y0 + rows` of a
-/// `width` x `height` image (or a single pixel, for ray trees).
+/// A rectangle of pixels to render: columns `x0..x0 + width` of rows `y0..y0 + rows` of an
+/// `image_width` x `image_height` image (a band of a frame's window, or a single pixel, for ray
+/// trees).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Band {
     pub x0: u32,
@@ -81,37 +84,40 @@ pub struct Arenas {
 
 /// Renders `scene` with the packet tracer, bands of rows in parallel, reporting finished rows
 /// to `progress`. The bytes do not depend on the thread count: each pixel is computed by exactly
-/// one band, in a fixed order.
+/// one band, in a fixed order. Bands are [`BAND_ROWS`] rows of the full image (starting at row
+/// 0) clipped to `opts.window()`, so a crop of whole bands traces the very packets the whole
+/// render traces for those rows.
 pub fn render_packet(
     scene: &Scene,
     geometry: &Geometry,
     opts: &RenderOptions,
     progress: Progress,
 ) -> Result<Frame> {
-    let (w, h) = (opts.width, opts.height);
-    let mut frame = Frame::new(w, h);
+    let win = opts.window();
+    let mut frame = Frame::window(win, opts.width, opts.height);
     let ctx = Context {
         scene,
         geometry,
         opts: &opts.shade,
     };
-    let band_len = (w * BAND_ROWS) as usize;
-    (frame.rays, frame.bounce_time) = frame
-        .color
-        .par_chunks_mut(band_len)
-        .zip(frame.depth.par_chunks_mut(band_len))
-        .zip(frame.normal.par_chunks_mut(band_len))
-        .enumerate()
-        .map_init(Arenas::default, |arenas, (i, ((color, depth), normal))| {
-            let y0 = i as u32 * BAND_ROWS;
-            let band = Band {
-                x0: 0,
-                y0,
-                width: w,
-                rows: BAND_ROWS.min(h - y0),
-                image_width: w,
-                image_height: h,
-            };
+    let bands = window_bands(win, opts.width, opts.height);
+    let mut work = Vec::with_capacity(bands.len());
+    let (mut color, mut depth, mut normal) = (
+        frame.color.as_mut_slice(),
+        frame.depth.as_mut_slice(),
+        frame.normal.as_mut_slice(),
+    );
+    for band in bands {
+        let n = (band.width * band.rows) as usize;
+        let (c, rest_c) = color.split_at_mut(n);
+        let (d, rest_d) = depth.split_at_mut(n);
+        let (m, rest_m) = normal.split_at_mut(n);
+        (color, depth, normal) = (rest_c, rest_d, rest_m);
+        work.push((band, c, d, m));
+    }
+    (frame.rays, frame.bounce_time) = work
+        .into_par_iter()
+        .map_init(Arenas::default, |arenas, (band, color, depth, normal)| {
             let mut out = BandOutput {
                 color,
                 depth,
@@ -142,6 +148,26 @@ pub fn render_packet(
             },
         )?;
     Ok(frame)
+}
+
+/// The bands of `win`, top to bottom: the full image's bands of [`BAND_ROWS`] rows (from row 0)
+/// that meet the window, each clipped to it.
+fn window_bands(win: Window, image_width: u32, image_height: u32) -> Vec<Band> {
+    let mut bands = Vec::new();
+    let mut y0 = win.y0;
+    while y0 < win.y1 {
+        let y1 = ((y0 / BAND_ROWS + 1) * BAND_ROWS).min(win.y1);
+        bands.push(Band {
+            x0: win.x0,
+            y0,
+            width: win.width(),
+            rows: y1 - y0,
+            image_width,
+            image_height,
+        });
+        y0 = y1;
+    }
+    bands
 }
 
 /// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree; returns the
