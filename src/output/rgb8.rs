@@ -1,0 +1,179 @@
+//! The 8-bit images: a [`Frame`]'s colour, depth and normal images as 8-bit RGB, and their PNG,
+//! TGA and PPM encodings and decodings. Conversions follow the course: a channel is
+//! `int(c * 255)` clamped to `[0, 255]` (truncation, not rounding); depth is grey, white at
+//! `near` and black at `far` and beyond (and where nothing was hit); normals are `abs(n)` on
+//! black.
+
+use std::path::Path;
+
+use super::Format;
+use crate::error::{Error, Result};
+use crate::frame::Frame;
+use crate::math::Vec3;
+
+/// An 8-bit RGB image, rows top to bottom.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rgb8 {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<u8>,
+}
+
+/// The course's colour-to-byte rule: truncate `c * 255`, clamp to `[0, 255]` (NaN gives 0).
+#[inline]
+pub fn to_byte(c: f32) -> u8 {
+    (c * 255.0).clamp(0.0, 255.0) as u8
+}
+
+fn from_pixels(frame: &Frame, f: impl Fn(usize) -> Vec3) -> Rgb8 {
+    let n = frame.width as usize * frame.height as usize;
+    let mut data = Vec::with_capacity(n * 3);
+    for i in 0..n {
+        let c = f(i);
+        data.extend_from_slice(&[to_byte(c.x), to_byte(c.y), to_byte(c.z)]);
+    }
+    Rgb8 {
+        width: frame.width,
+        height: frame.height,
+        data,
+    }
+}
+
+/// The colour image.
+pub fn color_image(frame: &Frame) -> Rgb8 {
+    from_pixels(frame, |i| frame.color[i])
+}
+
+/// The depth image: grey `(far - t) / (far - near)` clamped to `[0, 1]`; black where nothing was
+/// hit.
+pub fn depth_image(frame: &Frame, near: f32, far: f32) -> Rgb8 {
+    from_pixels(frame, |i| {
+        let t = frame.depth[i];
+        if t.is_finite() {
+            Vec3::splat(((far - t) / (far - near)).clamp(0.0, 1.0))
+        } else {
+            Vec3::ZERO
+        }
+    })
+}
+
+/// The normal image: `abs(normal)` as RGB, black where nothing was hit.
+pub fn normal_image(frame: &Frame) -> Rgb8 {
+    from_pixels(frame, |i| frame.normal[i].abs())
+}
+
+/// Encodes `img` as PNG, TGA or PPM.
+pub(super) fn encode_rgb8(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
+    let (w, h) = (img.width as usize, img.height as usize);
+    match format {
+        Format::Ppm => {
+            let mut out = format!("P6\n{w} {h}\n255\n").into_bytes();
+            out.extend_from_slice(&img.data);
+            Ok(out)
+        }
+        Format::Tga => {
+            // Uncompressed true-colour, 24 bits, rows stored bottom to top (origin bottom left).
+            let mut out = vec![0u8; 18];
+            out[2] = 2;
+            out[12..14].copy_from_slice(&(w as u16).to_le_bytes());
+            out[14..16].copy_from_slice(&(h as u16).to_le_bytes());
+            out[16] = 24;
+            for row in (0..h).rev() {
+                for px in img.data[row * w * 3..(row + 1) * w * 3].chunks_exact(3) {
+                    out.extend_from_slice(&[px[2], px[1], px[0]]);
+                }
+            }
+            Ok(out)
+        }
+        Format::Png => {
+            let mut out = Vec::new();
+            let encoder = image::codecs::png::PngEncoder::new(&mut out);
+            image::ImageEncoder::write_image(
+                encoder,
+                &img.data,
+                img.width,
+                img.height,
+                image::ExtendedColorType::Rgb8,
+            )
+            .map_err(|e| Error::Other(format!("cannot encode PNG: {e}")))?;
+            Ok(out)
+        }
+        Format::Exr | Format::Pfm | Format::Hdr => unreachable!("not an 8-bit format"),
+    }
+}
+
+/// Decodes an 8-bit RGB PNG, TGA or PPM (as `whitted` writes them); `None` if `bytes` are not
+/// one, or hold another kind of pixel.
+pub(super) fn decode_rgb8(bytes: &[u8], format: Format) -> Option<Rgb8> {
+    let fmt = match format {
+        Format::Png => image::ImageFormat::Png,
+        Format::Tga => image::ImageFormat::Tga,
+        Format::Ppm => image::ImageFormat::Pnm,
+        Format::Exr | Format::Pfm | Format::Hdr => return None,
+    };
+    match image::load_from_memory_with_format(bytes, fmt).ok()? {
+        image::DynamicImage::ImageRgb8(img) => Some(Rgb8 {
+            width: img.width(),
+            height: img.height(),
+            data: img.into_raw(),
+        }),
+        _ => None,
+    }
+}
+
+/// Reads a PNG (8 or 16 bits per channel, RGB or RGBA or grey) as 8-bit RGB; 16-bit values are
+/// rounded to the nearest 8-bit value. Used by tests comparing against reference images.
+pub fn read_png(path: &Path) -> Result<Rgb8> {
+    let img = image::open(path).map_err(|e| Error::Other(format!("{}: {e}", path.display())))?;
+    let rgb = img.to_rgb16();
+    let (width, height) = rgb.dimensions();
+    let data = rgb
+        .into_raw()
+        .into_iter()
+        .map(|v| ((v as u32 * 255 + 32767) / 65535) as u8)
+        .collect();
+    Ok(Rgb8 {
+        width,
+        height,
+        data,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bytes_truncate_like_the_course() {
+        assert_eq!(to_byte(0.5), 127);
+        assert_eq!(to_byte(0.1), 25);
+        assert_eq!(to_byte(1.0), 255);
+        assert_eq!(to_byte(7.0), 255);
+        assert_eq!(to_byte(-1.0), 0);
+        assert_eq!(to_byte(f32::NAN), 0);
+    }
+
+    #[test]
+    fn tga_is_bottom_up_bgr() {
+        let img = Rgb8 {
+            width: 1,
+            height: 2,
+            data: vec![1, 2, 3, 4, 5, 6],
+        };
+        let out = encode_rgb8(&img, Format::Tga).unwrap();
+        assert_eq!(&out[18..], &[6, 5, 4, 3, 2, 1]);
+    }
+
+    #[test]
+    fn each_8_bit_format_decodes_what_it_encoded() {
+        let img = Rgb8 {
+            width: 3,
+            height: 2,
+            data: (0..18).map(|v| v * 13).collect(),
+        };
+        for format in [Format::Png, Format::Tga, Format::Ppm] {
+            let bytes = encode_rgb8(&img, format).unwrap();
+            assert_eq!(decode_rgb8(&bytes, format), Some(img.clone()), "{format:?}");
+        }
+    }
+}
