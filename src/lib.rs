@@ -44,7 +44,9 @@
 //!                          |  grid/ is the course's grid: --stats, and the -visualize_grid
 //!                          |      picture both tracers draw with its march
 //!                          v
-//!            output.rs: Frame -> PNG / TGA / PPM, written atomically
+//!            output/: Frame -> PNG / TGA / PPM, EXR / PFM / HDR, written atomically; a
+//!                     crop's piece records its place and render (EXR window or sidecar)
+//!            merge.rs: pieces --checked, assembled--> the full image (`whitted merge`)
 //!
 //! one pixel again --render::trace_ray_tree--> raytree.rs: RayTree --> JSON
 //!                                        '--> witness/: witness camera render + overlay -> PNG
@@ -66,8 +68,9 @@
 //! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH),
 //!              grid (the course's uniform grid and its picture)
 //! tracers      reference (recursive), wavefront (queues and packets)
-//! front door   render (threads, picks a tracer), output (files), witness (ray-tree picture),
-//!              heatmap (eye-ray cost picture, drawn with witness's canvas)
+//! front door   render (threads, picks a tracer), output (files), merge (pieces into one),
+//!              witness (ray-tree picture), heatmap (eye-ray cost picture, drawn with witness's
+//!              canvas)
 //! commands     bench, cli (main.rs calls cli::run)
 //! ```
 //!
@@ -92,6 +95,7 @@ pub mod heatmap;
 #[doc(hidden)]
 pub mod intersect;
 pub mod math;
+pub mod merge;
 pub mod options;
 pub mod output;
 #[doc(hidden)]

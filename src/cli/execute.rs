@@ -8,8 +8,8 @@ use std::time::{Duration, Instant};
 use super::render_options::Command;
 use crate::error::Result;
 use crate::heatmap;
-use crate::options;
-use crate::output;
+use crate::options::{self, RenderOptions};
+use crate::output::{self, ImageKind, piece::RenderFingerprint};
 use crate::progress::RowBar;
 use crate::raytree::TreeSource;
 use crate::render;
@@ -38,7 +38,11 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         .chain(cmd.normals.iter())
         .map(PathBuf::as_path)
         .collect();
-    for out in outputs.iter().chain(cmd.ray_tree_image.as_deref().iter()) {
+    let win = cmd.render.window();
+    for out in &outputs {
+        output::check_writable(out, win.width(), win.height())?;
+    }
+    if let Some(out) = &cmd.ray_tree_image {
         output::check_writable(out, w, h)?;
     }
     if let Some(out) = &cmd.heatmap {
@@ -62,20 +66,26 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     let (mut accel, mut bounce_time, mut grid) = (None, Vec::new(), None);
     if !outputs.is_empty() {
         let t1 = Instant::now();
-        let bar = RowBar::new("render", h);
+        let bar = RowBar::new("render", win.height());
         let frame = render::render_with_progress(&scene, &cmd.render, &|rows| bar.rows_done(rows))?;
         bar.finish();
         phases.push(("render", t1.elapsed()));
         let t2 = Instant::now();
-        if let Some(out) = &cmd.output {
-            output::write_image(&output::color_image(&frame), out)?;
+        // Every image is encoded before any is written: a failed run leaves none.
+        let print = RenderFingerprint::new(&scene, &cmd.render);
+        let images = [
+            cmd.output.as_ref().map(|p| (ImageKind::Color, p)),
+            cmd.depth.as_ref().map(|(near, far, p)| {
+                let (near, far) = (*near, *far);
+                (ImageKind::Depth { near, far }, p)
+            }),
+            cmd.normals.as_ref().map(|p| (ImageKind::Normals, p)),
+        ];
+        let mut files = Vec::new();
+        for (kind, path) in images.into_iter().flatten() {
+            files.extend(output::frame_files(&frame, kind, path, &print.of(kind))?);
         }
-        if let Some((near, far, out)) = &cmd.depth {
-            output::write_image(&output::depth_image(&frame, *near, *far), out)?;
-        }
-        if let Some(out) = &cmd.normals {
-            output::write_image(&output::normal_image(&frame), out)?;
-        }
+        output::write_files(&files)?;
         phases.push(("write", t2.elapsed()));
         rays = frame.rays;
         accel = frame.accel;
@@ -120,8 +130,13 @@ fn execute_quietly(cmd: Command) -> Result<()> {
 /// Traces the eye rays again counting their traversal work, writes the heatmap to `out` and
 /// prints its maximum.
 fn write_heatmap(cmd: &Command, scene: &Scene, out: &Path) -> Result<()> {
-    let bar = RowBar::new("heatmap", cmd.render.height);
-    let costs = render::eye_ray_costs(scene, &cmd.render, &|rows| bar.rows_done(rows))?;
+    // The heatmap is of the full image, whatever the crop.
+    let opts = RenderOptions {
+        crop: None,
+        ..cmd.render.clone()
+    };
+    let bar = RowBar::new("heatmap", opts.height);
+    let costs = render::eye_ray_costs(scene, &opts, &|rows| bar.rows_done(rows))?;
     bar.finish();
     output::write_image(&heatmap::draw_heatmap(&costs), out)?;
     let ((x, y), max) = costs.max();
@@ -136,7 +151,11 @@ fn write_heatmap(cmd: &Command, scene: &Scene, out: &Path) -> Result<()> {
 /// Traces pixel `(x, y)` again, recording its ray tree; writes it as JSON to `json` and, when
 /// asked, renders the witness view and draws the tree over it.
 fn write_ray_tree(cmd: &Command, scene: &Scene, x: u32, y: u32, json: &Path) -> Result<()> {
-    let opts = &cmd.render;
+    // The tree's pixel and the witness picture belong to the full image, whatever the crop.
+    let opts = &RenderOptions {
+        crop: None,
+        ..cmd.render.clone()
+    };
     let (tree, _) = render::trace_ray_tree(scene, opts, x, y)?;
     let scene_name = cmd.scene.display().to_string();
     let source = TreeSource {

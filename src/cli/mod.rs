@@ -22,13 +22,17 @@
 //! args --run--> COMMANDS: render / course style --render::parse_render_args--> Command
 //!                                  --execute.rs--> Scene::load, render, output, ray tree, stats
 //!                         bench --bench::parse_bench_args--> BenchOptions --> crate::bench::run
+//!                         tiles --tiles.rs--> one `render --tile I/N` line per tile + the merge line
+//!                         merge --merge.rs--> crate::merge::merge
 //! ```
 
 pub mod bench;
 mod execute;
+pub mod merge;
 pub mod render;
 mod render_options;
 pub mod table;
+pub mod tiles;
 
 use std::ffi::OsString;
 
@@ -63,6 +67,16 @@ pub const COMMANDS: &[Subcommand] = &[
             Some(opts) => crate::bench::run(&opts),
             None => print_help(&bench::help()),
         },
+    },
+    Subcommand {
+        name: "tiles",
+        usage: tiles::USAGE,
+        run: tiles::run,
+    },
+    Subcommand {
+        name: "merge",
+        usage: merge::USAGE,
+        run: merge::run,
     },
 ];
 

@@ -8,7 +8,7 @@ use std::path::{Component, Path, PathBuf};
 pub use super::render_options::{Command, OPTIONS};
 use super::table::{self, Parsed};
 use crate::error::{Error, Result};
-use crate::options::{self, GridOptions};
+use crate::options::{self, GridOptions, Window};
 
 /// The usage lines of `whitted render`, shared with the overview of `whitted --help`.
 pub const USAGE: &str = concat!(
@@ -61,6 +61,15 @@ pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command
     }
     check(&cmd, modern)?;
     cmd.render.grid = grid_options(&cmd)?;
+    if let Some((i, n)) = cmd.tile {
+        if cmd.render.crop.is_some() {
+            return Err(Error::Usage(
+                "options --crop and --tile both pick the window to render: expected one of them"
+                    .to_string(),
+            ));
+        }
+        cmd.render.crop = Some(Window::tile(i, n, cmd.render.width, cmd.render.height)?);
+    }
     Ok(Some(cmd))
 }
 

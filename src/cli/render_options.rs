@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use super::table::{Opt, Table, Values};
 use crate::error::{Error, Result};
 use crate::math::Vec3;
-use crate::options::{self, GridView, RenderOptions, Tracer};
+use crate::options::{self, GridView, RenderOptions, Tracer, Window};
 use crate::witness::{WitnessPlace, WitnessSpec};
 
 /// Everything the command line asks for.
@@ -38,6 +38,8 @@ pub struct Command {
     pub max_grid_cells: u64,
     /// Notes for stderr about accepted-but-inert options.
     pub notes: Vec<String>,
+    /// `--tile I/N`, turned into `render.crop` once the image size is known.
+    pub tile: Option<(u32, u32)>,
 }
 
 impl Command {
@@ -63,11 +65,17 @@ impl Command {
             grid_view: None,
             max_grid_cells: options::DEFAULT_MAX_GRID_CELLS,
             notes: Vec::new(),
+            tile: None,
         }
     }
 }
 
-const FILES: &str = "INPUT AND OUTPUT (images by extension: .png, .tga, .ppm; written atomically)";
+const FILES: &str = "INPUT AND OUTPUT (images by extension, written atomically: .png .tga .ppm \
+                     8-bit, int(c * 255); .exr .pfm .hdr 32-bit float, linear: colour as \
+                     rendered, depth the distance along the primary ray (+inf where nothing is \
+                     hit, HDR 0), normals signed x y z (HDR abs); EXR: ZIP, channels R G B or Z)";
+const PIECES: &str =
+    "PIECES OF A BIG RENDER (docs/render-farm.md; `whitted tiles`, `whitted merge`)";
 const RENDERING: &str = "RENDERING (defaults in brackets)";
 const RAY_TREE: &str = "RAY TREE (every ray one pixel spawns; -o is optional with it)";
 const GRID: &str =
@@ -156,7 +164,7 @@ pub static OPTIONS: Table<Command> = Table {
             short: "",
             values: &[("FILE", "a file name")],
             section: FILES,
-            help: "normal image: abs(normal) as RGB",
+            help: "normal image: abs(normal) as RGB (float formats: the signed normal)",
             apply: |c, v| {
                 c.normals = Some(v.path()?);
                 Ok(())
@@ -330,7 +338,7 @@ pub static OPTIONS: Table<Command> = Table {
             short: "",
             values: &[("N", "a pixel count")],
             section: RENDERING,
-            help: "refuse larger images [67108864]",
+            help: "refuse renders of more pixels (a crop counts its own) [67108864]",
             apply: |c, v| {
                 c.render.max_pixels = v.number()?;
                 Ok(())
@@ -359,6 +367,44 @@ pub static OPTIONS: Table<Command> = Table {
                    stderr, only when it is a terminal, for renders over a second)",
             apply: |c, _| {
                 c.stats = true;
+                Ok(())
+            },
+        },
+        Opt {
+            long: "--crop",
+            course: "",
+            short: "",
+            values: &[
+                ("X0", "a first column X0"),
+                ("X1", "an end column X1"),
+                ("Y0", "a first row Y0"),
+                ("Y1", "an end row Y1"),
+            ],
+            section: PIECES,
+            help: "render only columns X0..X1 and rows Y0..Y1 (half-open, in the full image), with \
+                   exactly the rays the full render traces there",
+            apply: |c, v| {
+                let (x0, x1, y0, y1) = (v.number()?, v.number()?, v.number()?, v.number()?);
+                c.render.crop = Some(Window { x0, x1, y0, y1 });
+                Ok(())
+            },
+        },
+        Opt {
+            long: "--tile",
+            course: "",
+            short: "",
+            values: &[("I/N", "a tile I/N such as 3/16")],
+            section: PIECES,
+            help: "render tile I (from 0) of N: horizontal strips of whole rows, top to bottom, cut \
+                   on multiples of 8 rows as evenly as they go (strip I takes runs floor(I*R/N) to \
+                   floor((I+1)*R/N) of the R = ceil(H/8) runs of 8 rows). A piece records its \
+                   place in the full image and its render's fingerprint: an EXR in its data \
+                   window and an attribute, other formats in a sidecar FILE.piece",
+            apply: |c, v| {
+                c.tile = Some(v.choice(|t| {
+                    let (i, n) = t.split_once('/')?;
+                    Some((i.parse().ok()?, n.parse().ok()?))
+                })?);
                 Ok(())
             },
         },

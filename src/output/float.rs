@@ -282,7 +282,11 @@ pub fn decode_hdr(bytes: &[u8]) -> std::result::Result<Raster, String> {
     if !bytes.starts_with(b"#?RADIANCE\n") && !bytes.starts_with(b"#?RGBE\n") {
         return Err(bad());
     }
-    let blank = bytes.windows(2).position(|w| w == b"\n\n").ok_or_else(bad)? + 2;
+    let blank = bytes
+        .windows(2)
+        .position(|w| w == b"\n\n")
+        .ok_or_else(bad)?
+        + 2;
     let (tokens, start) = header_tokens(&bytes[blank..], 4).ok_or_else(bad)?;
     if tokens[0] != "-Y" || tokens[2] != "+X" {
         return Err(bad());
@@ -321,7 +325,11 @@ mod tests {
             assert!(p[0] >= 128, "{v}: mantissa normalised");
             let back = from_rgbe(p)[0];
             assert!(back <= v && v - back <= v / 128.0, "{v} -> {back}");
-            assert_eq!(to_rgbe(from_rgbe(p)), p, "{v}: decoding and encoding again is exact");
+            assert_eq!(
+                to_rgbe(from_rgbe(p)),
+                p,
+                "{v}: decoding and encoding again is exact"
+            );
         }
     }
 

@@ -107,7 +107,10 @@ impl Format {
 pub enum ImageKind {
     Color,
     /// 8-bit images map depth `near..far` to white..black.
-    Depth { near: f32, far: f32 },
+    Depth {
+        near: f32,
+        far: f32,
+    },
     Normals,
 }
 
@@ -174,7 +177,12 @@ impl Raster {
     }
 
     /// A float raster whose pixel `i` (row-major) `f` fills.
-    fn from_pixels(width: u32, height: u32, channels: u32, f: impl Fn(usize, &mut [f32])) -> Raster {
+    fn from_pixels(
+        width: u32,
+        height: u32,
+        channels: u32,
+        f: impl Fn(usize, &mut [f32]),
+    ) -> Raster {
         let mut values = vec![0.0f32; width as usize * height as usize * channels as usize];
         for (i, px) in values.chunks_exact_mut(channels as usize).enumerate() {
             f(i, px);
@@ -290,23 +298,61 @@ pub fn decode(bytes: &[u8], format: Format) -> std::result::Result<Decoded, Stri
     }
 }
 
-/// Writes the `kind` image of `frame` to `path` in the format its extension names. An EXR
-/// records its place and `fingerprint` itself; any other format gets a sidecar
-/// ([`piece::write_with_sidecar`]) when the frame is a piece of a larger image, and loses a
-/// stale one otherwise.
-pub fn write_frame(frame: &Frame, kind: ImageKind, path: &Path, fingerprint: &str) -> Result<()> {
+/// A file to write: its path and bytes.
+pub type FileBytes = (PathBuf, Vec<u8>);
+
+/// The files that hold the `kind` image of `frame` at `path`, in the format its extension
+/// names: the image, preceded by its sidecar ([`piece`]) when the frame is a piece of a larger
+/// image in a format that cannot record its place itself. An EXR records its place and
+/// `fingerprint` in itself.
+pub fn frame_files(
+    frame: &Frame,
+    kind: ImageKind,
+    path: &Path,
+    fingerprint: &str,
+) -> Result<Vec<FileBytes>> {
     let format = Format::for_path(path)?;
     let place = Place::of(frame);
-    let bytes = encode(&frame_raster(frame, kind, format), format, &place, Some(fingerprint))?;
-    if format.records_its_place() || place.is_whole() {
-        piece::remove_stale_sidecar(path)?;
-        write_atomic(path, &bytes)
-    } else {
-        piece::write_with_sidecar(path, &bytes, &piece::Piece {
+    let bytes = encode(
+        &frame_raster(frame, kind, format),
+        format,
+        &place,
+        Some(fingerprint),
+    )?;
+    let mut files = Vec::with_capacity(2);
+    if !format.records_its_place() && !place.is_whole() {
+        let text = piece::sidecar_text(&piece::Piece {
             fingerprint: fingerprint.to_string(),
             place,
-        })
+        });
+        files.push((piece::sidecar_path(path), text.into_bytes()));
     }
+    files.push((path.to_path_buf(), bytes));
+    Ok(files)
+}
+
+/// Writes `files` atomically and in order ([`write_atomic_files`]): if any cannot be written,
+/// none is left. An image written without a sidecar loses the stale sidecar an earlier piece of
+/// the same name left.
+pub fn write_files(files: &[FileBytes]) -> Result<()> {
+    let refs: Vec<(&Path, &[u8])> = files
+        .iter()
+        .map(|(p, b)| (p.as_path(), b.as_slice()))
+        .collect();
+    write_atomic_files(&refs, "write image")?;
+    for (path, _) in files {
+        let side = piece::sidecar_path(path);
+        let is_sidecar = path.to_string_lossy().ends_with(".piece");
+        if !is_sidecar && !files.iter().any(|(p, _)| *p == side) {
+            piece::remove_stale_sidecar(path)?;
+        }
+    }
+    Ok(())
+}
+
+/// Writes the `kind` image of `frame` to `path` ([`frame_files`], [`write_files`]).
+pub fn write_frame(frame: &Frame, kind: ImageKind, path: &Path, fingerprint: &str) -> Result<()> {
+    write_files(&frame_files(frame, kind, path, fingerprint)?)
 }
 
 /// Checks, before a render starts, that `path` has a known extension, fits the format, and lies
@@ -390,11 +436,14 @@ pub fn write_atomic_as(path: &Path, bytes: &[u8], action: &'static str) -> Resul
 pub(crate) fn write_atomic_files(files: &[(&Path, &[u8])], action: &'static str) -> Result<()> {
     let temps: Vec<PathBuf> = files.iter().map(|(p, _)| temp_path(p)).collect();
     let mut renamed = 0;
-    let result = files.iter().zip(&temps).try_for_each(|((path, bytes), tmp)| {
-        let mut file = fs::File::create(tmp).map_err(|e| (*path, e))?;
-        file.write_all(bytes).map_err(|e| (*path, e))?;
-        file.sync_all().map_err(|e| (*path, e))
-    });
+    let result = files
+        .iter()
+        .zip(&temps)
+        .try_for_each(|((path, bytes), tmp)| {
+            let mut file = fs::File::create(tmp).map_err(|e| (*path, e))?;
+            file.write_all(bytes).map_err(|e| (*path, e))?;
+            file.sync_all().map_err(|e| (*path, e))
+        });
     let result = result.and_then(|()| {
         files.iter().zip(&temps).try_for_each(|((path, _), tmp)| {
             fs::rename(tmp, path).map_err(|e| (*path, e))?;
@@ -410,4 +459,3 @@ pub(crate) fn write_atomic_files(files: &[(&Path, &[u8])], action: &'static str)
     }
     Ok(())
 }
-

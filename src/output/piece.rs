@@ -20,7 +20,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{ImageKind, Place, write_atomic_files};
+use super::{ImageKind, Place};
 use crate::error::{Error, Result};
 use crate::options::{RenderOptions, Window};
 use crate::scene::Scene;
@@ -64,14 +64,19 @@ pub fn parse_sidecar(text: &str) -> std::result::Result<Piece, String> {
         let mut words = line.split_whitespace();
         let values: Vec<String> = words.by_ref().skip(1).map(str::to_string).collect();
         if !line.starts_with(&format!("{key} ")) || values.len() != count {
-            return Err(bad(&format!("a line `{key}` with {count} values, found `{line}`")));
+            return Err(bad(&format!(
+                "a line `{key}` with {count} values, found `{line}`"
+            )));
         }
         Ok(values)
     };
     let fingerprint = field("fingerprint", 1)?.remove(0);
     let numbers = |v: Vec<String>| -> std::result::Result<Vec<u32>, String> {
         v.iter()
-            .map(|s| s.parse().map_err(|_| bad(&format!("a whole number, found `{s}`"))))
+            .map(|s| {
+                s.parse()
+                    .map_err(|_| bad(&format!("a whole number, found `{s}`")))
+            })
             .collect()
     };
     let image = numbers(field("image", 2)?)?;
@@ -109,14 +114,6 @@ pub fn read_sidecar(path: &Path) -> std::result::Result<Piece, String> {
     parse_sidecar(&text).map_err(|e| format!("sidecar {}: {e}", side.display()))
 }
 
-/// Writes a piece's image and its sidecar atomically, the sidecar first: an image on disk
-/// always has its sidecar, and a failed write leaves neither.
-pub fn write_with_sidecar(path: &Path, bytes: &[u8], piece: &Piece) -> Result<()> {
-    let side = sidecar_path(path);
-    let text = sidecar_text(piece);
-    write_atomic_files(&[(&side, text.as_bytes()), (path, bytes)], "write image")
-}
-
 /// Removes the sidecar an earlier piece left under the name of a whole image written now.
 pub fn remove_stale_sidecar(path: &Path) -> Result<()> {
     let side = sidecar_path(path);
@@ -129,6 +126,7 @@ pub fn remove_stale_sidecar(path: &Path) -> Result<()> {
 }
 
 /// 64-bit FNV-1a, fed through `fmt::Write` so a scene is hashed as it is formatted.
+#[derive(Clone, Copy)]
 struct Fnv1a(u64);
 
 impl Fnv1a {
@@ -146,23 +144,37 @@ impl std::fmt::Write for Fnv1a {
     }
 }
 
-/// The fingerprint of the `kind` image of `scene` rendered with `opts`: 16 hex digits.
-pub fn fingerprint(scene: &Scene, opts: &RenderOptions, kind: ImageKind) -> String {
-    // What does not decide pixels is left out: the crop, threads, limits.
-    let pixels = RenderOptions {
-        crop: None,
-        threads: 0,
-        max_pixels: 0,
-        max_bounces: 0,
-        ..opts.clone()
-    };
-    let mut h = Fnv1a::new();
-    let _ = write!(
-        h,
-        "whitted {}\n{scene:?}\n{pixels:?}\n{kind:?}",
-        env!("CARGO_PKG_VERSION")
-    );
-    format!("{:016x}", h.0)
+/// The hash of a render (whitted's version, the scene, the options that decide pixels), from
+/// which each of its images' fingerprints follows.
+#[derive(Clone, Copy)]
+pub struct RenderFingerprint(Fnv1a);
+
+impl RenderFingerprint {
+    /// Hashes `scene` rendered with `opts`.
+    pub fn new(scene: &Scene, opts: &RenderOptions) -> RenderFingerprint {
+        // What does not decide pixels is left out: the crop, threads, limits.
+        let pixels = RenderOptions {
+            crop: None,
+            threads: 0,
+            max_pixels: 0,
+            max_bounces: 0,
+            ..opts.clone()
+        };
+        let mut h = Fnv1a::new();
+        let _ = write!(
+            h,
+            "whitted {}\n{scene:?}\n{pixels:?}\n",
+            env!("CARGO_PKG_VERSION")
+        );
+        RenderFingerprint(h)
+    }
+
+    /// The fingerprint of the render's `kind` image: 16 hex digits.
+    pub fn of(&self, kind: ImageKind) -> String {
+        let mut h = self.0;
+        let _ = write!(h, "{kind:?}");
+        format!("{:016x}", h.0)
+    }
 }
 
 #[cfg(test)]
