@@ -282,7 +282,7 @@ pub fn merge(out: &Path, pieces: &[PathBuf]) -> Result<()> {
     check_tiling(&pieces)?;
     let whole = assemble(&pieces)?;
     let place = Place::whole(whole.width, whole.height);
-    let bytes = output::encode(&whole, format, &place, Some(&pieces[0].fingerprint))?;
+    let bytes = output::encode_raster(&whole, format, &place, Some(&pieces[0].fingerprint))?;
     piece::remove_stale_sidecar(out)?;
     output::write_atomic(out, &bytes)
 }

@@ -245,5 +245,8 @@ fn the_gnu_parallel_driver_gives_the_one_go_render() {
     args.extend(OPTIONS.split(' '));
     run(&dir, "bash", &args, &[("HOME", dir.display().to_string())]);
     let merged = std::fs::read(dir.join("frame.png")).unwrap();
-    assert!(merged == one_go(&dir, &showcase(), "whole.png"), "parallel tiles differ from one go");
+    assert!(
+        merged == one_go(&dir, &showcase(), "whole.png"),
+        "parallel tiles differ from one go"
+    );
 }

@@ -49,8 +49,10 @@ pub fn encode_exr(raster: &Raster, place: &Place, fingerprint: Option<&str>) -> 
             AnyChannel::new(*name, FlatSamples::F32(plane))
         })
         .collect();
-    let mut attributes = LayerAttributes::default();
-    attributes.layer_position = Vec2(place.window.x0 as i32, place.window.y0 as i32);
+    let mut attributes = LayerAttributes {
+        layer_position: Vec2(place.window.x0 as i32, place.window.y0 as i32),
+        ..LayerAttributes::default()
+    };
     if let Some(f) = fingerprint {
         attributes.other.insert(
             Text::from(FINGERPRINT_ATTRIBUTE),

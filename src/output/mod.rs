@@ -237,7 +237,7 @@ pub fn frame_raster(frame: &Frame, kind: ImageKind, format: Format) -> Raster {
 }
 
 /// Encodes `raster` as `format`; an EXR records `place` and `fingerprint` in itself.
-pub fn encode(
+pub fn encode_raster(
     raster: &Raster,
     format: Format,
     place: &Place,
@@ -313,7 +313,7 @@ pub fn frame_files(
 ) -> Result<Vec<FileBytes>> {
     let format = Format::for_path(path)?;
     let place = Place::of(frame);
-    let bytes = encode(
+    let bytes = encode_raster(
         &frame_raster(frame, kind, format),
         format,
         &place,
@@ -401,10 +401,9 @@ fn temp_path(path: &Path) -> PathBuf {
     }
 }
 
-/// Writes the 8-bit image `img` (a witness picture, say) to `path` atomically: a temporary
-/// file beside it, flushed, then renamed. Float formats get its values divided by 255.
-pub fn write_image(img: &Rgb8, path: &Path) -> Result<()> {
-    let format = Format::for_path(path)?;
+/// Encodes the 8-bit image `img` (a witness picture, say) as `format`; float formats get its
+/// values divided by 255, and an EXR records no render.
+pub fn encode(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
     let b = &img.data;
     let raster = match format.samples() {
         StoredSamples::Rgb8 => Raster::from_rgb8(img),
@@ -415,8 +414,12 @@ pub fn write_image(img: &Rgb8, path: &Path) -> Result<()> {
             [0, 1, 2].map(|c| b[i * 3 + c] as f32 / 255.0)
         }),
     };
-    let place = Place::whole(img.width, img.height);
-    write_atomic(path, &encode(&raster, format, &place, None)?)
+    encode_raster(&raster, format, &Place::whole(img.width, img.height), None)
+}
+
+/// Writes the 8-bit image `img` to `path` atomically ([`encode`], [`write_atomic`]).
+pub fn write_image(img: &Rgb8, path: &Path) -> Result<()> {
+    write_atomic(path, &encode(img, Format::for_path(path)?)?)
 }
 
 /// Writes `bytes` to `path` through a temporary file and a rename.
