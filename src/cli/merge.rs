@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// The usage line of `whitted merge`, for `whitted --help`.
-pub const USAGE: &str = "    whitted merge OUT PIECE...     assemble the pieces of a render (--crop, --tile) \
-                         into OUT\n";
+pub const USAGE: &str =
+    "    whitted merge OUT PIECE...   assemble the pieces of a render into OUT\n";
 
 /// The text of `whitted merge --help`.
 pub fn help() -> String {

@@ -70,10 +70,8 @@ impl Command {
     }
 }
 
-const FILES: &str = "INPUT AND OUTPUT (images by extension, written atomically: .png .tga .ppm \
-                     8-bit, int(c * 255); .exr .pfm .hdr 32-bit float, linear: colour as \
-                     rendered, depth the distance along the primary ray (+inf where nothing is \
-                     hit, HDR 0), normals signed x y z (HDR abs); EXR: ZIP, channels R G B or Z)";
+const FILES: &str = "INPUT AND OUTPUT (images by extension: .png .tga .ppm 8-bit, .exr .pfm .hdr \
+                     float; written atomically)";
 const PIECES: &str =
     "PIECES OF A BIG RENDER (docs/render-farm.md; `whitted tiles`, `whitted merge`)";
 const RENDERING: &str = "RENDERING (defaults in brackets)";
@@ -129,7 +127,8 @@ pub static OPTIONS: Table<Command> = Table {
             short: "-o",
             values: &[("FILE", "a file name")],
             section: FILES,
-            help: "colour image",
+            help: "colour image: 8-bit int(c * 255); float formats linear, as rendered (EXR: \
+                   32-bit, ZIP, channels R G B; HDR: RGBE)",
             apply: |c, v| {
                 c.output = Some(v.path()?);
                 Ok(())
@@ -145,7 +144,9 @@ pub static OPTIONS: Table<Command> = Table {
                 ("FILE", "a file name"),
             ],
             section: FILES,
-            help: "depth image: white at NEAR, black at FAR and beyond (NEAR < FAR)",
+            help: "depth image: white at NEAR, black at FAR and beyond (NEAR < FAR); float formats \
+                   hold the distance along the primary ray (+inf where nothing is hit, HDR 0; EXR \
+                   channel Z)",
             apply: |c, v| {
                 let near = v.finite()?;
                 let far = v.finite()?;
@@ -164,7 +165,8 @@ pub static OPTIONS: Table<Command> = Table {
             short: "",
             values: &[("FILE", "a file name")],
             section: FILES,
-            help: "normal image: abs(normal) as RGB (float formats: the signed normal)",
+            help: "normal image: abs(normal) as RGB; float formats the signed normal x y z (HDR \
+                   abs)",
             apply: |c, v| {
                 c.normals = Some(v.path()?);
                 Ok(())

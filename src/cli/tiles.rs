@@ -24,8 +24,8 @@ use crate::error::{Error, Result};
 use crate::options::Window;
 
 /// The usage line of `whitted tiles`, for `whitted --help`.
-pub const USAGE: &str = "    whitted tiles N SCENE -o OUT [OPTIONS]   print the render line of each of N tiles, \
-                         then the merge line\n";
+pub const USAGE: &str =
+    "    whitted tiles N SCENE ...    the render lines of N tiles, then their merge\n";
 
 /// The text of `whitted tiles --help`.
 pub fn help() -> String {
