@@ -13,10 +13,10 @@ pub fn help() -> String {
     format!(
         "whitted merge: put the pieces of a render back into the full image\n\n\
          USAGE:\n{USAGE}\n\
-         Each piece records its place in the full image and its render's fingerprint (an EXR \
-         in its data window\nand an attribute, other formats in a sidecar PIECE.piece). The \
-         merge checks that every piece is readable,\nin OUT's format, of one render, and that \
-         together they cover the image exactly once; then it writes OUT\natomically, with the \
+         Each piece records its place in the full image and its render's fingerprint: an EXR\n\
+         in its data window and an attribute, other formats in a sidecar PIECE.piece. The merge\n\
+         checks that every piece is readable, in OUT's format and of one render, and that\n\
+         together they cover the image exactly once; then it writes OUT atomically, with the\n\
          bytes a one-go render writes. Any refusal is one line naming the piece, exit code 2,\n\
          and nothing is written. See docs/render-farm.md.\n"
     )

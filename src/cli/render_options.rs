@@ -70,10 +70,9 @@ impl Command {
     }
 }
 
-const FILES: &str = "INPUT AND OUTPUT (images by extension: .png .tga .ppm 8-bit, .exr .pfm .hdr \
-                     float; written atomically)";
-const PIECES: &str =
-    "PIECES OF A BIG RENDER (docs/render-farm.md; `whitted tiles`, `whitted merge`)";
+const FILES: &str =
+    "INPUT AND OUTPUT (images by extension: .png .tga .ppm 8-bit, .exr .pfm .hdr float)";
+const PIECES: &str = "PIECES OF A BIG RENDER (docs/render-farm.md, whitted tiles, whitted merge)";
 const RENDERING: &str = "RENDERING (defaults in brackets)";
 const RAY_TREE: &str = "RAY TREE (every ray one pixel spawns; -o is optional with it)";
 const GRID: &str =

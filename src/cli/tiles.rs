@@ -32,10 +32,11 @@ pub fn help() -> String {
     format!(
         "whitted tiles: the command lines of a render cut into N tiles, for any scheduler\n\n\
          USAGE:\n{USAGE}\n\
-         OPTIONS are those of `whitted render` (see `whitted render --help`), without --crop, \
-         --tile and --ray-tree.\nPrints N lines `whitted render ... --tile I/N` whose outputs \
-         are the tiles' pieces (OUT = big.exr: big.tile00.exr, ...),\nthen one line of \
-         `whitted merge` commands. Run the first N lines with any scheduler, then the last:\n\n\
+         The arguments after N are those of `whitted render` (see `whitted render --help`),\n\
+         without --crop, --tile and --ray-tree. Prints N lines `whitted render ... --tile I/N`\n\
+         whose outputs are the tiles' pieces (OUT = big.exr: big.tile00.exr, ...), then one\n\
+         line of `whitted merge` commands. Run the first N lines with any scheduler, then the\n\
+         last:\n\n\
          \x20   whitted tiles 16 scene.txt --size 4096 3072 -o big.exr > jobs.txt\n\
          \x20   head -n 16 jobs.txt | parallel && tail -n 1 jobs.txt | sh\n\n\
          See docs/render-farm.md (GNU parallel over ssh, Slurm, Kubernetes).\n"
