@@ -74,7 +74,7 @@
 //! commands     bench, cli (main.rs calls cli::run)
 //! ```
 //!
-//! The public API is [`Scene`], [`render()`](render::render), [`RenderOptions`], [`Frame`],
+//! The public API is [`Scene`], [`render()`](render::render), [`RenderOptions`], [`Frame`], [`merge`],
 //! [`output`], [`raytree`] and [`Error`]. The other modules are public only so that the
 //! benchmarks, fuzz targets and tests can reach the kernels; they are hidden from the docs and
 //! not a stable interface. `main.rs` is a thin wrapper around `cli::run`.

@@ -103,7 +103,9 @@ fn unknown_output_format_fails_before_the_scene_is_read() {
     let dir = folder("format");
     let before = listing(&dir);
     let run = whitted(&dir, &["render", "bad.txt", "-o", "out.jpg"]);
-    run.assert_error("out.jpg: expected an output file ending in .png, .tga or .ppm");
+    run.assert_error(
+        "out.jpg: expected an output file ending in .png, .tga, .ppm, .exr, .pfm or .hdr",
+    );
     let run = whitted(
         &dir,
         &[

@@ -1,6 +1,6 @@
 //! From a [`Frame`] to files: colour, depth and normal images in the format the output file's
-//! extension names, 8-bit (PNG, TGA, PPM: [`rgb8`]) or floating point (OpenEXR, PFM, Radiance
-//! HDR: [`float`]), and a render's pieces ([`piece`]: the place of a cropped image in the full
+//! extension names, 8-bit (PNG, TGA, PPM: `rgb8.rs`) or floating point (OpenEXR, PFM, Radiance
+//! HDR: `float.rs`), and a render's pieces ([`piece`]: the place of a cropped image in the full
 //! one, and the fingerprint of the render it belongs to). Every file is written to a temporary
 //! file in the target folder and renamed into place, so a failed write never leaves a
 //! half-written image and an existing file stays intact until the new one is complete.
@@ -331,7 +331,7 @@ pub fn frame_files(
     Ok(files)
 }
 
-/// Writes `files` atomically and in order ([`write_atomic_files`]): if any cannot be written,
+/// Writes `files` atomically and in order (`write_atomic_files`): if any cannot be written,
 /// none is left. An image written without a sidecar loses the stale sidecar an earlier piece of
 /// the same name left.
 pub fn write_files(files: &[FileBytes]) -> Result<()> {
