@@ -70,6 +70,13 @@ pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command
         }
         cmd.render.crop = Some(Window::tile(i, n, cmd.render.width, cmd.render.height)?);
     }
+    if cmd.render.crop.is_some() && cmd.render.grid.is_some_and(|g| g.view.is_some()) {
+        return Err(Error::Usage(
+            "options --crop and --tile render pieces of the scene's image, not of the grid \
+             picture: expected no --visualize-grid with them"
+                .to_string(),
+        ));
+    }
     Ok(Some(cmd))
 }
 
