@@ -1,6 +1,14 @@
-//! The course's two cameras. A camera maps a point of the unit screen square (`(0, 0)` bottom
-//! left, `(1, 1)` top right) to a world-space ray; [`Camera::pixel_point`] maps pixel centres of
-//! an image to that square (non-square images crop the square, keeping its centre).
+//! The course's two cameras. A camera maps a point of the screen square, measured from its
+//! centre (`(0, 0)` the centre, `(-0.5, -0.5)` bottom left, `(0.5, 0.5)` top right), to a
+//! world-space ray; [`Camera::sample_screen`] maps a sample position inside a pixel of an image
+//! to that square and [`Camera::pixel_point`] a pixel's centre (non-square images crop the
+//! square, keeping its centre).
+//!
+//! The screen point is computed from the centre with one rounding, so that it is exactly
+//! antisymmetric: pixel `x` and pixel `width - 1 - x` get opposite coordinates. (Computing
+//! `(x + 0.5) / side` first and subtracting 0.5 afterwards rounds twice; the two roundings
+//! differ on either side of the centre, and pixel centres lying exactly on an edge through
+//! the centre, like the diagonal of the course's `scene7_01`, fell on either side of it.)
 //!
 //! ```text
 //! OrthographicCamera { center 0 0 10  direction 0 0 -1  up 0 1 0  size 5 }
@@ -63,13 +71,12 @@ impl Camera {
         }
     }
 
-    /// The ray through `point` of the unit screen square.
-    pub fn generate_ray(&self, point: Vec2) -> Ray {
-        let sx = point.x - 0.5;
-        let sy = point.y - 0.5;
+    /// The ray through `screen`, a point of the screen square measured from its centre
+    /// (x to the right, y up, the square's edges at -0.5 and 0.5).
+    pub fn generate_ray(&self, screen: Vec2) -> Ray {
         let (h, v) = (
-            self.horizontal * (sx * self.screen),
-            self.up * (sy * self.screen),
+            self.horizontal * (screen.x * self.screen),
+            self.up * (screen.y * self.screen),
         );
         match self.kind {
             Projection::Orthographic { .. } => Ray::new(self.center + h + v, self.direction),
@@ -79,19 +86,34 @@ impl Camera {
         }
     }
 
-    /// The screen point of pixel `(x, y)` of a `width` x `height` image, `y = 0` being the top
-    /// row. The square screen covers the larger dimension; the smaller one is cropped.
+    /// The screen point of pixel `(x, y)`'s centre in a `width` x `height` image, `y = 0` being
+    /// the top row. The square screen covers the larger dimension; the smaller one is cropped.
     pub fn pixel_point(x: u32, y: u32, width: u32, height: u32) -> Vec2 {
-        Camera::sample_point(x as f32 + 0.5, y as f32 + 0.5, width, height)
+        Camera::sample_screen(x, y, Vec2::splat(0.5), width, height)
     }
 
-    /// Like [`Camera::pixel_point`] for an arbitrary position inside the image, in pixel units
-    /// from the top-left corner (used for supersampling).
+    /// The screen point of a sample of pixel `(x, y)` (`y = 0` the top row) of a `width` x
+    /// `height` image, `offset` being its place in the pixel as the course measures it: from the
+    /// pixel's lower-left corner, y up, in `[0, 1)`. The numerators are the distance from the
+    /// image centre in pixels (`x - width/2` and `j - height/2` are exact, `j = height - 1 - y`
+    /// counting rows from the bottom), so adding the offset and dividing by the side round once
+    /// each and a pixel centre is rounded once.
+    pub fn sample_screen(x: u32, y: u32, offset: Vec2, width: u32, height: u32) -> Vec2 {
+        let side = width.max(height) as f32;
+        let j = height - 1 - y;
+        let dx = (x as f32 - width as f32 * 0.5) + offset.x;
+        let dy = (j as f32 - height as f32 * 0.5) + offset.y;
+        Vec2::new(dx / side, dy / side)
+    }
+
+    /// The screen point of a position inside the image in pixel units from its top-left corner
+    /// (x to the right, y down, continuous): the inverse of what the witness camera projects.
     pub fn sample_point(px: f32, py: f32, width: u32, height: u32) -> Vec2 {
         let side = width.max(height) as f32;
-        let x0 = (side - width as f32) * 0.5;
-        let y0 = (side - height as f32) * 0.5;
-        Vec2::new((x0 + px) / side, (y0 + height as f32 - py) / side)
+        Vec2::new(
+            (px - width as f32 * 0.5) / side,
+            (height as f32 * 0.5 - py) / side,
+        )
     }
 }
 
@@ -120,18 +142,40 @@ mod tests {
             -Vec3::Z,
             Vec3::Y,
         );
-        let r = c.generate_ray(Vec2::splat(0.5));
+        let r = c.generate_ray(Vec2::ZERO);
         assert!((r.dir - -Vec3::Z).length() < 1e-6);
         // Top of the screen is up.
-        assert!(c.generate_ray(Vec2::new(0.5, 1.0)).dir.y > 0.0);
+        assert!(c.generate_ray(Vec2::new(0.0, 0.5)).dir.y > 0.0);
         // Pixel row 0 is the top row.
-        assert!(Camera::pixel_point(0, 0, 10, 10).y > 0.9);
+        assert!(Camera::pixel_point(0, 0, 10, 10).y > 0.4);
     }
 
     #[test]
     fn non_square_images_crop_the_screen() {
         let p = Camera::pixel_point(0, 0, 400, 200);
-        assert!((p.x - 0.5 / 400.0).abs() < 1e-6);
-        assert!((p.y - (100.0 + 199.5) / 400.0).abs() < 1e-6);
+        assert_eq!(p.x, -199.5 / 400.0);
+        assert_eq!(p.y, 99.5 / 400.0);
+    }
+
+    #[test]
+    fn pixel_centres_are_antisymmetric() {
+        for (w, h) in [(12, 12), (9, 9), (400, 200), (3, 1000), (1, 1)] {
+            for x in 0..w {
+                let (a, b) = (
+                    Camera::pixel_point(x, 0, w, h),
+                    Camera::pixel_point(w - 1 - x, h - 1, w, h),
+                );
+                assert_eq!((a.x, a.y), (-b.x, -b.y), "{w}x{h} pixel {x}");
+            }
+        }
+        assert_eq!(Camera::pixel_point(4, 4, 9, 9), Vec2::ZERO);
+    }
+
+    #[test]
+    fn sample_point_agrees_with_pixel_centres() {
+        for (x, y) in [(0, 0), (5, 7), (399, 199)] {
+            let p = Camera::sample_point(x as f32 + 0.5, y as f32 + 0.5, 400, 200);
+            assert_eq!(p, Camera::pixel_point(x, y, 400, 200));
+        }
     }
 }

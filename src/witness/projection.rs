@@ -58,20 +58,19 @@ impl View {
     /// Pixel position (x from the left, y from the top, continuous) of a camera-space point in
     /// front of the camera; the inverse of [`Camera::sample_point`] and `generate_ray`.
     pub(super) fn to_pixel(&self, c: Vec3) -> [f32; 2] {
-        let sx = 0.5 + c.x / (c.z * 2.0 * self.tan_half);
-        let sy = 0.5 + c.y / (c.z * 2.0 * self.tan_half);
-        let x0 = (self.side - self.width) * 0.5;
-        let y0 = (self.side - self.height) * 0.5;
-        [sx * self.side - x0, y0 + self.height - sy * self.side]
+        let sx = c.x / (c.z * 2.0 * self.tan_half);
+        let sy = c.y / (c.z * 2.0 * self.tan_half);
+        [
+            sx * self.side + self.width * 0.5,
+            self.height * 0.5 - sy * self.side,
+        ]
     }
 
     /// Length of the un-normalised ray direction (unit depth) through pixel `(px, py)`, which
     /// turns the frame's distances into depths.
     pub(super) fn ray_length(&self, px: f32, py: f32) -> f32 {
-        let x0 = (self.side - self.width) * 0.5;
-        let y0 = (self.side - self.height) * 0.5;
-        let sx = (x0 + px) / self.side - 0.5;
-        let sy = (y0 + self.height - py) / self.side - 0.5;
+        let sx = (px - self.width * 0.5) / self.side;
+        let sy = (self.height * 0.5 - py) / self.side;
         let h = 2.0 * self.tan_half;
         (1.0 + (sx * h).powi(2) + (sy * h).powi(2)).sqrt()
     }
