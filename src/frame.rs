@@ -1,6 +1,6 @@
-//! The [`Frame`] a render fills: linear colour per pixel, plus the primary hit's distance and
-//! normal (for the depth and normal images) and what the render cost (rays cast, the packet
-//! tracer's BVH and time per bounce). A leaf of the data flow: both tracers write frames,
+//! The [`Frame`] a render fills: linear colour per pixel, plus (when asked) the primary hit's
+//! distance and normal for the depth and normal images and every sample's colour, and what the
+//! render cost (rays cast, the packet tracer's BVH and time per bounce). A leaf of the data flow: both tracers write frames,
 //! `output.rs` turns them into image files, `witness/` draws over them. Beside it, the
 //! [`CostMap`] the packet tracer's counting pass fills for `--heatmap`.
 
@@ -21,12 +21,19 @@ pub struct Frame {
     /// The full image's size.
     pub image_width: u32,
     pub image_height: u32,
-    /// Linear RGB per pixel.
+    /// Linear RGB per pixel (filtered from its samples).
     pub color: Vec<Vec3>,
-    /// Distance along the primary ray to the first hit; `+inf` where nothing was hit.
+    /// Distance along the primary ray to the first hit; `+inf` where nothing was hit. With
+    /// several samples per pixel, the ray of the sample nearest the pixel centre. Empty when
+    /// the render was asked not to keep depth and normals
+    /// ([`RenderOptions::depth_normal`](crate::RenderOptions::depth_normal)).
     pub depth: Vec<f32>,
-    /// Unit world normal of the first hit; zero where nothing was hit.
+    /// Unit world normal of the first hit; zero where nothing was hit. The same sample as the
+    /// depth; empty like it.
     pub normal: Vec<Vec3>,
+    /// Every sample's colour, pixel by pixel (rows top to bottom), each pixel's samples in
+    /// order; empty unless [`RenderOptions::keep_samples`](crate::RenderOptions::keep_samples).
+    pub samples: Vec<Vec3>,
     /// The rays cast to make the frame, by kind and bounce.
     pub rays: RayCounts,
     /// Packet tracer: the acceleration structure it built.
@@ -42,10 +49,16 @@ impl Frame {
     /// depth and normal where the primary ray hit (depth is `+inf` and the normal zero
     /// elsewhere). `None` when every value is finite, as it must be.
     pub fn non_finite_pixel(&self) -> Option<(u32, u32)> {
+        let aux = !self.depth.is_empty();
         let bad = |i: usize| {
+            if !self.color[i].is_finite() {
+                return true;
+            }
+            if !aux {
+                return false;
+            }
             let hit = self.depth[i] != f32::INFINITY;
-            !self.color[i].is_finite()
-                || self.depth[i].is_nan()
+            self.depth[i].is_nan()
                 || (hit && !self.normal[i].is_finite())
                 || (!hit && self.normal[i] != Vec3::ZERO)
         };
@@ -73,6 +86,7 @@ impl Frame {
             color: vec![Vec3::ZERO; n],
             depth: vec![f32::INFINITY; n],
             normal: vec![Vec3::ZERO; n],
+            samples: Vec::new(),
             rays: RayCounts::default(),
             accel: None,
             bounce_time: Vec::new(),

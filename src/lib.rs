@@ -86,6 +86,8 @@ pub mod bvh;
 #[doc(hidden)]
 pub mod cli;
 pub mod error;
+pub mod film;
+pub mod filter;
 pub mod frame;
 #[doc(hidden)]
 pub mod geometry;
@@ -105,6 +107,7 @@ pub mod raytree;
 #[doc(hidden)]
 pub mod reference;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 #[doc(hidden)]
 pub mod shade;

@@ -1,10 +1,13 @@
 //! What a render is asked to do and the checks made before anything is allocated: the
-//! [`RenderOptions`] (size, crop window, shading switches, tracer, threads, limits), the
+//! [`RenderOptions`] (size, crop window, shading switches, sampling and filter, tracer,
+//! threads, limits), the
 //! [`Tracer`] choice, the [`Window`] of the full image a render covers (`--crop`, `--tile`), the
 //! [`Progress`] hook, and the limits with the flags that lift them. A leaf shared by the command
 //! line, `render.rs`, both tracers' frame loops and the tile merge.
 
 use crate::error::{Error, Result};
+use crate::filter::Filter;
+use crate::sampler::Sampler;
 use crate::shade::ShadeOptions;
 
 /// The largest image the renderer accepts without `--max-pixels` (64 megapixels).
@@ -15,10 +18,18 @@ pub const DEFAULT_MAX_BOUNCES: u32 = 1000;
 pub const MAX_THREADS: usize = 1024;
 /// The most cells a grid may have without `--max-grid-cells` (16 Mi cells, 64 MiB of counts).
 pub const DEFAULT_MAX_GRID_CELLS: u64 = 1 << 24;
+/// The most samples per pixel accepted without `--max-samples`.
+pub const DEFAULT_MAX_SAMPLES: u32 = 1024;
+/// The largest filter support radius (in pixels) accepted without `--max-filter-radius`.
+pub const DEFAULT_MAX_FILTER_RADIUS: u32 = 32;
 /// Worker-thread stack for the recursion of one bounce (measured: between 256 B and 1 KiB).
 const STACK_PER_BOUNCE: usize = 8 << 10;
-/// Bytes a frame holds per pixel (colour, depth, normal) plus the 8-bit image made from it.
-const BYTES_PER_PIXEL: u64 = 28 + 3;
+/// Bytes a frame holds per pixel for colour, plus the 8-bit image made from it.
+const BYTES_PER_PIXEL: u64 = 12 + 3;
+/// Bytes a frame holds per pixel for depth and normal, when kept.
+const BYTES_PER_PIXEL_AUX: u64 = 16;
+/// Bytes the film holds per sample in flight (colour and offset).
+const BYTES_PER_SAMPLE: u64 = 20;
 /// `--tile` strips start and end on multiples of this many rows (the last ends at the image's
 /// bottom): a whole number of the packet tracer's bands, so a tile traces exactly the packets
 /// the one-go render traces for its rows.
@@ -152,6 +163,16 @@ pub struct RenderOptions {
     /// Render only this window of the full image (`--crop`, `--tile`); `None`: all of it.
     pub crop: Option<Window>,
     pub shade: ShadeOptions,
+    /// Where the samples of a pixel lie, and how many there are ([`Sampler::default`]: one, at
+    /// the centre).
+    pub sampler: Sampler,
+    /// How samples become pixels ([`Filter::default`]: the average of a pixel's own samples).
+    pub filter: Filter,
+    /// Keep each pixel's depth and normal in the frame (16 bytes a pixel); the depth and normal
+    /// images need them, a colour image does not.
+    pub depth_normal: bool,
+    /// Keep every sample's colour in the frame (for the `-render_samples` picture).
+    pub keep_samples: bool,
     pub tracer: Tracer,
     /// Worker threads; 0 means all cores.
     pub threads: usize,
@@ -159,6 +180,10 @@ pub struct RenderOptions {
     pub max_pixels: u64,
     /// Refuse bounce counts above this.
     pub max_bounces: u32,
+    /// Refuse more samples per pixel than this.
+    pub max_samples: u32,
+    /// Refuse filters whose support radius is over this many pixels.
+    pub max_filter_radius: u32,
     /// The course's grid, if asked for.
     pub grid: Option<GridOptions>,
 }
@@ -170,10 +195,16 @@ impl Default for RenderOptions {
             height: 512,
             crop: None,
             shade: ShadeOptions::default(),
+            sampler: Sampler::default(),
+            filter: Filter::default(),
+            depth_normal: true,
+            keep_samples: false,
             tracer: Tracer::Packet,
             threads: 0,
             max_pixels: DEFAULT_MAX_PIXELS,
             max_bounces: DEFAULT_MAX_BOUNCES,
+            max_samples: DEFAULT_MAX_SAMPLES,
+            max_filter_radius: DEFAULT_MAX_FILTER_RADIUS,
             grid: None,
         }
     }
@@ -241,18 +272,88 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
     if let Some(grid) = &opts.grid {
         check_grid(grid)?;
     }
+    check_sampling(opts)?;
     // Probe for the frame's memory so a size that cannot be allocated is an error, not an abort.
-    let bytes = pixels.saturating_mul(BYTES_PER_PIXEL);
+    let bytes = memory_bytes(opts);
     let fits = usize::try_from(bytes).is_ok_and(|b| Vec::<u8>::new().try_reserve_exact(b).is_ok());
     if !fits {
+        let samples = match opts.sampler.count {
+            1 => String::new(),
+            n => format!(" at {n} samples per pixel"),
+        };
         return Err(Error::Limit(format!(
-            "image size {}x{} needs {} MiB, more memory than can be allocated",
+            "image size {}x{}{samples} needs {} MiB, more memory than can be allocated",
             window.width(),
             window.height(),
-            (pixels as u128 * BYTES_PER_PIXEL as u128) >> 20
+            bytes >> 20
         )));
     }
     Ok(())
+}
+
+/// Checks the sampler and the filter.
+fn check_sampling(opts: &RenderOptions) -> Result<()> {
+    let s = &opts.sampler;
+    if s.count == 0 {
+        return Err(Error::Usage(
+            "sample count 0: expected at least 1 sample per pixel".to_string(),
+        ));
+    }
+    if s.count > opts.max_samples {
+        return Err(Error::Limit(format!(
+            "sample count {} is over the limit of {} per pixel (raise it with --max-samples N)",
+            s.count, opts.max_samples
+        )));
+    }
+    if s.pattern.needs_square() && s.grid() * s.grid() != s.count {
+        return Err(Error::Usage(format!(
+            "{} sampling with {} samples: expected a perfect square (1, 4, 9, 16, ...), the \
+             samples of a k x k grid",
+            s.pattern.name(),
+            s.count
+        )));
+    }
+    let f = &opts.filter;
+    if !(f.size > 0.0 && f.size.is_finite()) {
+        return Err(Error::Usage(format!(
+            "{} filter {} {}: expected a positive number",
+            f.shape.name(),
+            f.shape.parameter(),
+            f.size
+        )));
+    }
+    let r = f.support_radius();
+    if r > opts.max_filter_radius {
+        return Err(Error::Limit(format!(
+            "{} filter {} {} reaches {r} pixels, over the limit of {} (raise it with \
+             --max-filter-radius N)",
+            f.shape.name(),
+            f.shape.parameter(),
+            f.size,
+            opts.max_filter_radius
+        )));
+    }
+    Ok(())
+}
+
+/// What a render holds at its peak: the frame of its window (colour, depth and normal if
+/// kept, every sample if kept) and the 8-bit image made from it, and the film's bands in flight
+/// (a few per thread, each 8 rows of samples as wide as the window and its filter halo).
+pub fn memory_bytes(opts: &RenderOptions) -> u128 {
+    let window = opts.window();
+    let pixels = window.pixels() as u128;
+    let spp = opts.sampler.count as u128;
+    let aux = if opts.depth_normal { BYTES_PER_PIXEL_AUX } else { 0 } as u128;
+    let kept = if opts.keep_samples { 12 * spp } else { 0 };
+    let threads = match opts.threads {
+        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        n => n,
+    } as u128;
+    let r = opts.filter.support_radius() as u128;
+    let bands = threads + 2 * (r / 8 + 1) + 1;
+    let width = window.width() as u128 + 2 * r;
+    let film = bands * 8 * width * spp * BYTES_PER_SAMPLE as u128;
+    pixels * (BYTES_PER_PIXEL as u128 + aux + kept) + film
 }
 
 /// Checks a grid resolution: at least one cell per axis, no more cells than its limit.

@@ -14,6 +14,7 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::film::{FilmSpec, SampleBlock, render_film};
 use crate::frame::Frame;
 use crate::grid::Grid;
 use crate::grid::picture::{self, GridView};
@@ -211,38 +212,22 @@ fn visibility(scene: &Scene, ray: &Ray, max_t: f32, opts: &ShadeOptions) -> Vec3
     light
 }
 
-/// Renders with the reference tracer, rows in parallel; each row counts its rays locally and
-/// the counts are summed at the end. Only the rows and columns of `opts.window()` are traced.
-pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Frame {
-    let (w, h) = (opts.width, opts.height);
-    let win = opts.window();
-    let mut frame = Frame::window(win, w, h);
+/// Renders with the reference tracer: the film streams bands of rows in parallel, and each
+/// band traces its samples one by one, counting its rays locally (the counts are summed at
+/// the end).
+pub fn render_reference(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Result<Frame> {
     let tracer = ReferenceTracer::new(scene, opts.shade);
-    let row_len = win.width() as usize;
-    frame.rays = frame
-        .color
-        .par_chunks_mut(row_len)
-        .zip(frame.depth.par_chunks_mut(row_len))
-        .zip(frame.normal.par_chunks_mut(row_len))
-        .enumerate()
-        .map(|(row, ((color, depth), normal))| {
-            let y = win.y0 + row as u32;
-            let mut rays = RayCounts::default();
-            for x in win.x0..win.x1 {
-                let ray = scene.camera.generate_ray(Camera::pixel_point(x, y, w, h));
-                let sample = tracer.trace_primary_counted(&ray, None, &mut rays);
-                let i = (x - win.x0) as usize;
-                color[i] = sample.color;
-                if let Some(hit) = sample.hit {
-                    depth[i] = hit.t;
-                    normal[i] = hit.shading;
-                }
-            }
-            progress(1);
-            rays
-        })
-        .reduce(RayCounts::default, RayCounts::merged);
-    frame
+    let spec = FilmSpec::for_options(opts);
+    let (film, counts) = render_film(
+        &spec,
+        progress,
+        || (),
+        |_, block| Ok(tracer.trace_block(block)),
+    )?;
+    let rays = counts
+        .into_iter()
+        .fold(RayCounts::default(), RayCounts::merged);
+    Ok(film.into_frame(rays))
 }
 
 /// Draws the grid picture of `grid` (see [`crate::grid::picture`]): one camera ray per pixel,
@@ -284,17 +269,20 @@ pub fn render_grid_reference(
 }
 
 /// Traces pixel `(x, y)` of the frame `opts` describes once more, recording its ray tree;
-/// returns the pixel's colour and the tree. The tracer recurses once per bounce, so it runs on
-/// a thread with the render's stack.
+/// returns the pixel's colour and the tree. With several samples per pixel, the tree is that of
+/// the sample nearest the pixel centre, and the colour that sample's. The tracer recurses once
+/// per bounce, so it runs on a thread with the render's stack.
 pub fn trace_pixel_tree(
     scene: &Scene,
     opts: &RenderOptions,
     x: u32,
     y: u32,
 ) -> Result<(Vec3, RayTree)> {
-    let ray = scene
-        .camera
-        .generate_ray(Camera::pixel_point(x, y, opts.width, opts.height));
+    let offset = opts.sampler.nearest_offset(x, y);
+    let ray =
+        scene
+            .camera
+            .generate_ray(Camera::sample_screen(x, y, offset, opts.width, opts.height));
     std::thread::scope(|s| {
         std::thread::Builder::new()
             .stack_size(stack_size(opts.shade.bounces))
@@ -327,6 +315,20 @@ impl<'s> ReferenceTracer<'s> {
     /// A tracer for `scene`.
     pub fn new(scene: &'s Scene, opts: ShadeOptions) -> ReferenceTracer<'s> {
         ReferenceTracer { scene, opts }
+    }
+
+    /// Traces every sample of `block`, one camera ray each, in slot order; returns the rays cast.
+    pub fn trace_block(&self, block: &mut SampleBlock) -> RayCounts {
+        let mut rays = RayCounts::default();
+        for slot in 0..block.len() {
+            let ray = self.scene.camera.generate_ray(block.screen_point(slot));
+            let sample = self.trace_primary_counted(&ray, None, &mut rays);
+            block.color[slot] = sample.color;
+            if let Some(hit) = sample.hit {
+                block.record_hit(slot, hit.t, hit.shading);
+            }
+        }
+        rays
     }
 
     /// Traces a primary ray, recording its tree into `tree` when given.

@@ -72,7 +72,7 @@ fn render_scene(
     progress: Progress,
 ) -> Result<Frame> {
     match opts.tracer {
-        Tracer::Reference => Ok(pool.install(|| render_reference(scene, opts, progress))),
+        Tracer::Reference => pool.install(|| render_reference(scene, opts, progress)),
         Tracer::Packet => {
             let t0 = Instant::now();
             let geometry = Geometry::from_scene(scene);

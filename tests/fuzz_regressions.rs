@@ -57,7 +57,7 @@ fn render_tiny_target(text: &str) {
         };
         check_options(&opts).unwrap();
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
-        common::assert_finite(&render_reference(&scene, &opts, &|_| {}), text);
+        common::assert_finite(&render_reference(&scene, &opts, &|_| {}).unwrap(), text);
         let packet = whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap();
         common::assert_finite(&packet, text);
     }

@@ -43,7 +43,7 @@ fuzz_target!(|data: &[u8]| {
         // Straight to the tracers: `render` would start a thread pool for every input.
         let geometry = whitted::geometry::Geometry::from_scene(&scene);
         for frame in [
-            render_reference(&scene, &opts, &|_| {}),
+            render_reference(&scene, &opts, &|_| {}).unwrap(),
             whitted::wavefront::render_packet(&scene, &geometry, &opts, &|_| {}).unwrap(),
         ] {
             if let Some((x, y)) = frame.non_finite_pixel() {

@@ -1,13 +1,18 @@
-//! The packet tracer: the reference tracer's algorithm reorganised as a wavefront. The image is
-//! cut into bands of rows rendered in parallel; within a band, all rays of one bounce are
+//! The packet tracer: the reference tracer's algorithm reorganised as a wavefront. The film
+//! ([`crate::film`]) cuts the image into bands of rows rendered in parallel; a band's samples
+//! are traced in runs of whole 4x2-pixel tiles, and within a run, all rays of one bounce are
 //! gathered into typed queues, intersected 8 at a time as SIMD packets against the SoA
 //! [`Geometry`], then shaded one by one with the same functions as the reference tracer
 //! ([`crate::shade`]), which push the next bounce's mirror and refracted rays and this bounce's
 //! shadow rays onto queues. No recursion: colour reaches a pixel as `throughput * local term`.
 //!
 //! ```text
-//! generate_camera_rays -> for each bounce { intersect_closest -> shade_hits -> trace_shadow_rays }
+//! generate_sample_rays -> for each bounce { intersect_closest -> shade_hits -> trace_shadow_rays }
 //! ```
+//!
+//! A run's camera rays are its tiles' pixels row by row, each pixel's samples in order: with one
+//! sample a packet of 8 rays is a 4x2 tile, with 8 or more a pixel's samples fill the lanes
+//! (sample rays of a pixel are as coherent as rays get).
 //!
 //! Memory: the ray queue of bounce `b` lives in arena `b & 1`; the other arena receives the rays
 //! of bounce `b + 1` and the first is reset once bounce `b` is done. Hits and shadow rays live
@@ -21,13 +26,14 @@ mod stages;
 use std::time::{Duration, Instant};
 
 use bumpalo::Bump;
-use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+pub use crate::film::BAND_ROWS;
+use crate::film::{FilmSpec, SampleBlock, render_film};
 use crate::frame::Frame;
 use crate::geometry::Geometry;
-use crate::math::{Vec3, saturate};
-use crate::options::{Progress, RenderOptions, TILE_ROW_STEP, Window};
+use crate::math::{Vec2, Vec3, saturate};
+use crate::options::{Progress, RenderOptions, TILE_ROW_STEP};
 use crate::raytree::{RayTree, SegmentKind};
 use crate::scene::Scene;
 use crate::shade::ShadeOptions;
@@ -37,8 +43,6 @@ pub use heatmap::eye_ray_costs;
 use queue::RayQueue;
 use stages::{BounceQueues, intersect_closest, shade_hits, trace_shadow_rays};
 
-/// Rows per band: the unit of parallel work (a multiple of the 2-row camera tiles).
-pub const BAND_ROWS: u32 = 8;
 // A `--tile` strip is whole bands, so it traces the packets the one-go render traces.
 const _: () = assert!(TILE_ROW_STEP % BAND_ROWS == 0);
 
@@ -49,21 +53,45 @@ pub struct Context<'s> {
     pub opts: &'s ShadeOptions,
 }
 
-/// What a band writes: colour, depth and normal of its pixels, the rays it cast, and (for a
-/// single traced pixel) its ray tree.
+/// The most samples one run of the wavefront traces: a band of a wide image, or of many
+/// samples per pixel, is traced in several runs so its queues stay small (with one sample per
+/// pixel, a band of 8 rows of up to 8192 pixels is one run).
+pub const RUN_SAMPLES: u32 = 1 << 16;
+
+/// What a run writes: the colour of its samples, the depth and normal of its pixels, the rays
+/// it cast, and (for a single traced pixel) its ray tree. Ray `pixel` fields index `color`
+/// (with one sample per pixel, a slot is a pixel).
 pub struct BandOutput<'f> {
+    /// Per sample slot of the block.
     pub color: &'f mut [Vec3],
+    /// Per pixel (empty when not kept).
     pub depth: &'f mut [f32],
     pub normal: &'f mut [Vec3],
+    /// Per pixel, the sample whose hit the depth and normal show.
+    pub nearest: &'f [u32],
+    pub spp: u32,
     pub rays: RayCounts,
     /// Time spent on each bounce.
     pub bounce_time: Vec<Duration>,
     pub tree: Option<&'f mut RayTree>,
 }
 
-/// A rectangle of pixels to render: columns `x0..x0 + width` of rows `y0..y0 + rows` of an
-/// `image_width` x `image_height` image (a band of a frame's window, or a single pixel, for ray
-/// trees).
+impl BandOutput<'_> {
+    /// Records the first hit of the camera ray of `slot` if its pixel's depth and normal show it.
+    #[inline]
+    pub fn record_hit(&mut self, slot: usize, t: f32, normal: Vec3) {
+        let spp = self.spp as usize;
+        let p = slot / spp;
+        if !self.depth.is_empty() && self.nearest[p] as usize == slot % spp {
+            self.depth[p] = t;
+            self.normal[p] = normal;
+        }
+    }
+}
+
+/// A rectangle of pixels with one sample at each centre: columns `x0..x0 + width` of rows
+/// `y0..y0 + rows` of an `image_width` x `image_height` image (a band of the grid picture or of
+/// the heatmap's eye rays).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Band {
     pub x0: u32,
@@ -74,6 +102,51 @@ pub struct Band {
     pub image_height: u32,
 }
 
+impl Band {
+    /// Its camera samples: one per pixel, at the centre.
+    pub fn samples(&self) -> CameraSamples<'static> {
+        CameraSamples {
+            x0: self.x0,
+            y0: self.y0,
+            width: self.width,
+            rows: self.rows,
+            image_width: self.image_width,
+            image_height: self.image_height,
+            spp: 1,
+            offsets: &[],
+        }
+    }
+}
+
+/// The camera samples of a block: its pixels (full-image coordinates) and each sample's offset
+/// in its pixel, slot `((y - y0) * width + (x - x0)) * spp + s` (no offsets: one sample at
+/// each pixel centre).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSamples<'b> {
+    pub x0: u32,
+    pub y0: u32,
+    pub width: u32,
+    pub rows: u32,
+    pub image_width: u32,
+    pub image_height: u32,
+    pub spp: u32,
+    pub offsets: &'b [Vec2],
+}
+
+impl CameraSamples<'_> {
+    /// The number of 4x2-pixel tiles, row-major: `width.div_ceil(4)` per row of tiles.
+    pub fn tiles(&self) -> u32 {
+        self.width.div_ceil(4) * self.rows.div_ceil(2)
+    }
+}
+
+/// The tiles `first_tile..end_tile` of a block that one run of the wavefront traces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Run {
+    pub first_tile: u32,
+    pub end_tile: u32,
+}
+
 /// The three arenas one worker thread reuses band after band.
 #[derive(Default)]
 pub struct Arenas {
@@ -82,96 +155,88 @@ pub struct Arenas {
     scratch: Bump,
 }
 
-/// Renders `scene` with the packet tracer, bands of rows in parallel, reporting finished rows
-/// to `progress`. The bytes do not depend on the thread count: each pixel is computed by exactly
-/// one band, in a fixed order. Bands are [`BAND_ROWS`] rows of the full image (starting at row
-/// 0) clipped to `opts.window()`, so a crop of whole bands traces the very packets the whole
-/// render traces for those rows.
+/// Renders `scene` with the packet tracer: the film streams bands of rows in parallel, and
+/// each band is traced run by run, reporting finished rows to `progress`. The bytes do not
+/// depend on the thread count: each sample is traced by exactly one band, in runs fixed by the
+/// band alone.
 pub fn render_packet(
     scene: &Scene,
     geometry: &Geometry,
     opts: &RenderOptions,
     progress: Progress,
 ) -> Result<Frame> {
-    let win = opts.window();
-    let mut frame = Frame::window(win, opts.width, opts.height);
     let ctx = Context {
         scene,
         geometry,
         opts: &opts.shade,
     };
-    let bands = window_bands(win, opts.width, opts.height);
-    let mut work = Vec::with_capacity(bands.len());
-    let (mut color, mut depth, mut normal) = (
-        frame.color.as_mut_slice(),
-        frame.depth.as_mut_slice(),
-        frame.normal.as_mut_slice(),
-    );
-    for band in bands {
-        let n = (band.width * band.rows) as usize;
-        let (c, rest_c) = color.split_at_mut(n);
-        let (d, rest_d) = depth.split_at_mut(n);
-        let (m, rest_m) = normal.split_at_mut(n);
-        (color, depth, normal) = (rest_c, rest_d, rest_m);
-        work.push((band, c, d, m));
+    let spec = FilmSpec::for_options(opts);
+    let (film, bands) = render_film(&spec, progress, Arenas::default, |arenas, block| {
+        trace_block(&ctx, block, arenas)
+    })?;
+    let mut rays = RayCounts::default();
+    let mut bounce_time: Vec<Duration> = Vec::new();
+    for (r, times) in bands {
+        rays = rays.merged(r);
+        if bounce_time.len() < times.len() {
+            bounce_time.resize(times.len(), Duration::ZERO);
+        }
+        for (a, b) in bounce_time.iter_mut().zip(times) {
+            *a += b;
+        }
     }
-    (frame.rays, frame.bounce_time) = work
-        .into_par_iter()
-        .map_init(Arenas::default, |arenas, (band, color, depth, normal)| {
-            let mut out = BandOutput {
-                color,
-                depth,
-                normal,
-                rays: RayCounts::default(),
-                bounce_time: Vec::new(),
-                tree: None,
-            };
-            render_band(&ctx, band, &mut out, arenas)?;
-            // Sums of overflowing colours stay at the largest finite value, as in the
-            // reference tracer.
-            for c in out.color.iter_mut() {
-                *c = saturate(*c);
-            }
-            progress(band.rows);
-            Ok((out.rays, out.bounce_time))
-        })
-        .try_reduce(
-            Default::default,
-            |(rays_a, mut time_a), (rays_b, time_b)| {
-                if time_a.len() < time_b.len() {
-                    time_a.resize(time_b.len(), Duration::ZERO);
-                }
-                for (a, b) in time_a.iter_mut().zip(time_b) {
-                    *a += b;
-                }
-                Ok((rays_a.merged(rays_b), time_a))
-            },
-        )?;
+    let mut frame = film.into_frame(rays);
+    frame.bounce_time = bounce_time;
     Ok(frame)
 }
 
-/// The bands of `win`, top to bottom: the full image's bands of [`BAND_ROWS`] rows (from row 0)
-/// that meet the window, each clipped to it.
-fn window_bands(win: Window, image_width: u32, image_height: u32) -> Vec<Band> {
-    let mut bands = Vec::new();
-    let mut y0 = win.y0;
-    while y0 < win.y1 {
-        let y1 = ((y0 / BAND_ROWS + 1) * BAND_ROWS).min(win.y1);
-        bands.push(Band {
-            x0: win.x0,
-            y0,
-            width: win.width(),
-            rows: y1 - y0,
-            image_width,
-            image_height,
-        });
-        y0 = y1;
+/// Traces every sample of `block` in runs of whole tiles, at most [`RUN_SAMPLES`] samples each
+/// (at least one tile); returns the rays cast and the time per bounce.
+pub fn trace_block(
+    ctx: &Context<'_>,
+    block: &mut SampleBlock,
+    arenas: &mut Arenas,
+) -> Result<(RayCounts, Vec<Duration>)> {
+    let samples = CameraSamples {
+        x0: block.x0,
+        y0: block.y0,
+        width: block.width,
+        rows: block.rows,
+        image_width: block.image_width,
+        image_height: block.image_height,
+        spp: block.spp,
+        offsets: &block.offsets,
+    };
+    let mut out = BandOutput {
+        color: &mut block.color,
+        depth: &mut block.depth,
+        normal: &mut block.normal,
+        nearest: &block.nearest,
+        spp: block.spp,
+        rays: RayCounts::default(),
+        bounce_time: Vec::new(),
+        tree: None,
+    };
+    let per_run = (RUN_SAMPLES / (8 * samples.spp)).max(1);
+    let mut first_tile = 0;
+    while first_tile < samples.tiles() {
+        let run = Run {
+            first_tile,
+            end_tile: (first_tile + per_run).min(samples.tiles()),
+        };
+        render_run(ctx, &samples, run, &mut out, arenas)?;
+        first_tile = run.end_tile;
     }
-    bands
+    // Sums of overflowing colours stay at the largest finite value, as in the reference tracer.
+    for c in out.color.iter_mut() {
+        *c = saturate(*c);
+    }
+    Ok((out.rays, out.bounce_time))
 }
 
 /// Traces pixel `(x, y)` alone through the wavefront, recording its ray tree; returns the
-/// pixel's colour and the tree.
+/// pixel's colour and the tree. With several samples per pixel, the tree and colour are those
+/// of the sample nearest the pixel centre, as in the reference tracer.
 pub fn trace_pixel_tree(
     scene: &Scene,
     geometry: &Geometry,
@@ -184,13 +249,16 @@ pub fn trace_pixel_tree(
         geometry,
         opts: &opts.shade,
     };
-    let band = Band {
+    let offsets = [opts.sampler.nearest_offset(x, y)];
+    let samples = CameraSamples {
         x0: x,
         y0: y,
         width: 1,
         rows: 1,
         image_width: opts.width,
         image_height: opts.height,
+        spp: 1,
+        offsets: &offsets,
     };
     let (mut color, mut depth, mut normal) = ([Vec3::ZERO], [f32::INFINITY], [Vec3::ZERO]);
     let mut tree = RayTree::default();
@@ -198,26 +266,35 @@ pub fn trace_pixel_tree(
         color: &mut color,
         depth: &mut depth,
         normal: &mut normal,
+        nearest: &[0],
+        spp: 1,
         rays: RayCounts::default(),
         bounce_time: Vec::new(),
         tree: Some(&mut tree),
     };
-    render_band(&ctx, band, &mut out, &mut Arenas::default())?;
+    let run = Run {
+        first_tile: 0,
+        end_tile: 1,
+    };
+    render_run(&ctx, &samples, run, &mut out, &mut Arenas::default())?;
     Ok((color[0], tree))
 }
 
-/// The per-band driver: camera rays, then bounce after bounce until no ray is left.
-fn render_band(
+/// The per-run driver: camera rays, then bounce after bounce until no ray is left.
+fn render_run(
     ctx: &Context<'_>,
-    band: Band,
+    samples: &CameraSamples<'_>,
+    run: Run,
     out: &mut BandOutput<'_>,
     arenas: &mut Arenas,
 ) -> Result<()> {
     let Arenas { even, odd, scratch } = arenas;
     even.reset();
     odd.reset();
-    let mut rays = RayQueue::with_capacity_in((band.width * band.rows) as usize, even);
-    stages::generate_camera_rays(&ctx.scene.camera, band, &mut rays);
+    let tiles = (run.end_tile - run.first_tile) as usize;
+    let mut rays = RayQueue::with_capacity_in(tiles * 8 * samples.spp as usize, even);
+    stages::generate_sample_rays(&ctx.scene.camera, samples, run, &mut rays);
+    let band = (samples.y0, samples.rows);
     let mut bounce = 0;
     // Two bounces per turn so each queue's arena is named: even bounces read `even`, odd `odd`.
     loop {
@@ -243,7 +320,7 @@ pub const MAX_BAND_RAYS: usize = 1 << 22;
 
 /// Refuses a queue past [`MAX_BAND_RAYS`]: where every hit spawns both a mirror and a refracted
 /// ray whose colours are too bright for the weight cutoff to prune, the rays double each bounce.
-fn check_queue<'a>(next: RayQueue<'a>, band: Band, bounce: u32) -> Result<RayQueue<'a>> {
+fn check_queue<'a>(next: RayQueue<'a>, band: (u32, u32), bounce: u32) -> Result<RayQueue<'a>> {
     if next.len() <= MAX_BAND_RAYS {
         return Ok(next);
     }
@@ -254,8 +331,8 @@ fn check_queue<'a>(next: RayQueue<'a>, band: Band, bounce: u32) -> Result<RayQue
          with --tracer reference",
         next.len(),
         bounce + 1,
-        band.y0,
-        band.y0 + band.rows
+        band.0,
+        band.0 + band.1
     )))
 }
 

@@ -5,9 +5,9 @@
 use bumpalo::Bump;
 
 use super::queue::{HitColumns, NO_NODE, RayQueue, ShadowQueue};
-use super::{Band, BandOutput, Context};
+use super::{Band, BandOutput, CameraSamples, Context, Run};
 use crate::geometry::Geometry;
-use crate::math::{Ray, Vec3, saturate};
+use crate::math::{Ray, Vec2, Vec3, saturate};
 use crate::packet::{HitPacket, NO_HIT};
 use crate::scene::Camera;
 use crate::shade::{self, EPSILON};
@@ -25,28 +25,53 @@ pub struct BounceQueues<'c, 's, 'n> {
     pub next: RayQueue<'n>,
 }
 
-/// Queues the camera rays of a band in 4x2-pixel tiles (4 wide, 2 tall, lanes row by row), so
-/// each packet of 8 consecutive rays is one tile.
-pub fn generate_camera_rays(camera: &Camera, band: Band, queue: &mut RayQueue<'_>) {
-    for ty in (0..band.rows).step_by(2) {
-        for tx in (0..band.width).step_by(4) {
-            for ly in 0..2 {
-                for lx in 0..4 {
-                    let (x, y) = (tx + lx, ty + ly);
-                    if x >= band.width || y >= band.rows {
-                        continue;
-                    }
-                    let point = Camera::pixel_point(
-                        band.x0 + x,
-                        band.y0 + y,
-                        band.image_width,
-                        band.image_height,
+/// Queues the camera rays of the tiles of `run`: 4x2-pixel tiles, row-major, in each tile its
+/// pixels row by row and each pixel's samples in order, each ray's `pixel` its sample's slot.
+/// With one sample per pixel each packet of 8 consecutive rays is one tile; with 8 or more, a
+/// pixel's samples fill the lanes.
+pub fn generate_sample_rays(
+    camera: &Camera,
+    samples: &CameraSamples<'_>,
+    run: Run,
+    queue: &mut RayQueue<'_>,
+) {
+    let tiles_x = samples.width.div_ceil(4);
+    let spp = samples.spp as usize;
+    for tile in run.first_tile..run.end_tile {
+        let (tx, ty) = ((tile % tiles_x) * 4, (tile / tiles_x) * 2);
+        for ly in 0..2 {
+            for lx in 0..4 {
+                let (x, y) = (tx + lx, ty + ly);
+                if x >= samples.width || y >= samples.rows {
+                    continue;
+                }
+                let first = (y * samples.width + x) as usize * spp;
+                for slot in first..first + spp {
+                    let offset = samples.offsets.get(slot).copied();
+                    let point = Camera::sample_screen(
+                        samples.x0 + x,
+                        samples.y0 + y,
+                        offset.unwrap_or(Vec2::splat(0.5)),
+                        samples.image_width,
+                        samples.image_height,
                     );
-                    queue.push_camera(&camera.generate_ray(point), y * band.width + x);
+                    queue.push_camera(&camera.generate_ray(point), slot as u32);
                 }
             }
         }
     }
+}
+
+/// Queues one camera ray through each pixel centre of `band`, in 4x2-pixel tiles (4 wide, 2
+/// tall, lanes row by row), so each packet of 8 consecutive rays is one tile; a ray's `pixel`
+/// is its pixel's index in the band.
+pub fn generate_camera_rays(camera: &Camera, band: Band, queue: &mut RayQueue<'_>) {
+    let samples = band.samples();
+    let run = Run {
+        first_tile: 0,
+        end_tile: samples.tiles(),
+    };
+    generate_sample_rays(camera, &samples, run, queue);
 }
 
 /// Finds the closest hit of every queued ray, 8 rays at a time.
@@ -98,8 +123,7 @@ pub fn shade_hits(
             continue;
         };
         if bounce == 0 {
-            out.depth[px] = hit.t;
-            out.normal[px] = hit.shading;
+            out.record_hit(px, hit.t, hit.shading);
         }
         let Some(s) = shade::surface(scene, &ray, &hit, ctx.opts) else {
             continue;

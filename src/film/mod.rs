@@ -1,0 +1,298 @@
+//! The film of assignment 7: the samples a tracer traced, and the filter that turns them into
+//! pixels. A tracer's frame loop hands [`render_film`] a closure that traces one
+//! [`SampleBlock`] (a band of rows of the image, every sample of every pixel, their offsets set
+//! by the [`Sampler`]); the film streams the image band by band and makes each output pixel the
+//! normalised, filtered average of the samples around it ([`filter_pixel`]), with a halo of `r`
+//! rows taken from the neighbouring bands. Nothing grows with width x height x samples: only the
+//! bands in flight hold samples. Between the tracers (which call it) and the sampler, filter
+//! and camera (which it calls).
+//!
+//! ```text
+//! window (output pixels) --grow by r, crop at the image--> sample region --cut--> bands of BAND_ROWS
+//! band k --trace(closure)--> samples k --once bands k-h..k+h are in--> filter --> output rows of band k
+//! ```
+//!
+//! Depth and normal images are not filtered: each pixel shows the hit of its sample nearest the
+//! pixel centre (the first one on ties; with one sample, the centre), so a depth stays the
+//! distance to a surface that is there, and a normal a unit normal of it. When every weight of a
+//! pixel's support is zero (a box or tent narrower than the spacing of the samples, a tiny
+//! Gaussian), the pixel is black, as the course's `Filter::getColor` makes it.
+
+mod stream;
+
+pub use stream::{BAND_ROWS, FilmOutput, render_film};
+
+use crate::filter::Filter;
+use crate::frame::Frame;
+use crate::math::{Vec2, Vec3};
+use crate::options::{RenderOptions, Window};
+use crate::sampler::Sampler;
+use crate::scene::Camera;
+use crate::stats::RayCounts;
+
+/// `window` grown by `r` pixels on every side, cropped to a `width` x `height` image.
+pub fn grown(window: Window, r: u32, width: u32, height: u32) -> Window {
+    Window {
+        x0: window.x0.saturating_sub(r),
+        y0: window.y0.saturating_sub(r),
+        x1: window.x1.saturating_add(r).min(width),
+        y1: window.y1.saturating_add(r).min(height),
+    }
+}
+
+/// What a frame loop asks the film for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmSpec {
+    pub image_width: u32,
+    pub image_height: u32,
+    /// The pixels to make (the whole image, or a crop of it).
+    pub window: Window,
+    pub sampler: Sampler,
+    pub filter: Filter,
+    /// Keep the depth and normal of each pixel.
+    pub depth_normal: bool,
+    /// Keep every sample's colour (for `-render_samples`).
+    pub keep_samples: bool,
+}
+
+impl FilmSpec {
+    /// The film a render with `opts` makes: its window (the crop, or the whole image).
+    pub fn for_options(opts: &RenderOptions) -> FilmSpec {
+        FilmSpec {
+            image_width: opts.width,
+            image_height: opts.height,
+            window: opts.window(),
+            sampler: opts.sampler,
+            filter: opts.filter,
+            depth_normal: opts.depth_normal,
+            keep_samples: opts.keep_samples,
+        }
+    }
+
+    /// The pixels whose samples the window's pixels need: the window grown by the filter's
+    /// support radius, cropped at the image border.
+    pub fn region(&self) -> Window {
+        grown(
+            self.window,
+            self.filter.support_radius(),
+            self.image_width,
+            self.image_height,
+        )
+    }
+}
+
+/// The samples of a rectangle of pixels: where each lies (set by the film) and what colour it
+/// saw (set by the tracer). Sample `s` of pixel `(x, y)` is slot
+/// `((y - y0) * width + (x - x0)) * spp + s`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SampleBlock {
+    /// The first column and row, in the full image's coordinates.
+    pub x0: u32,
+    pub y0: u32,
+    pub width: u32,
+    pub rows: u32,
+    pub image_width: u32,
+    pub image_height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Each slot's offset in its pixel (from the lower-left corner, y up, in `[0, 1)`).
+    pub offsets: Vec<Vec2>,
+    /// Per pixel, the sample whose hit the depth and normal show (nearest the centre).
+    pub nearest: Vec<u32>,
+    /// Each slot's colour, black until traced.
+    pub color: Vec<Vec3>,
+    /// Per pixel, the distance to the nearest sample's hit (`+inf` for none); empty unless the
+    /// film keeps depth and normals.
+    pub depth: Vec<f32>,
+    /// Per pixel, the unit normal at that hit (zero for none); empty like `depth`.
+    pub normal: Vec<Vec3>,
+}
+
+impl SampleBlock {
+    /// The block of pixels `x0..x0 + width` x `y0..y0 + rows` of a `image_width` x
+    /// `image_height` image, with the offsets of `sampler`; depth and normals kept if asked.
+    #[allow(clippy::too_many_arguments)] // reason: a rectangle, the image it lies in, and two choices
+    pub fn new(
+        x0: u32,
+        y0: u32,
+        width: u32,
+        rows: u32,
+        image_width: u32,
+        image_height: u32,
+        sampler: &Sampler,
+        depth_normal: bool,
+    ) -> SampleBlock {
+        let spp = sampler.count;
+        let pixels = width as usize * rows as usize;
+        let slots = pixels * spp as usize;
+        let mut offsets = vec![Vec2::ZERO; slots];
+        let mut nearest = Vec::with_capacity(pixels);
+        for (p, chunk) in offsets.chunks_exact_mut(spp as usize).enumerate() {
+            let (x, y) = (
+                x0 + (p % width as usize) as u32,
+                y0 + (p / width as usize) as u32,
+            );
+            nearest.push(sampler.pixel_offsets(x, y, chunk));
+        }
+        let aux = if depth_normal { pixels } else { 0 };
+        SampleBlock {
+            x0,
+            y0,
+            width,
+            rows,
+            image_width,
+            image_height,
+            spp,
+            offsets,
+            nearest,
+            color: vec![Vec3::ZERO; slots],
+            depth: vec![f32::INFINITY; aux],
+            normal: vec![Vec3::ZERO; aux],
+        }
+    }
+
+    /// A block of one pixel holding one sample at `offset` (the ray-tree pixel).
+    pub fn single(x: u32, y: u32, offset: Vec2, image_width: u32, image_height: u32) -> Self {
+        SampleBlock {
+            x0: x,
+            y0: y,
+            width: 1,
+            rows: 1,
+            image_width,
+            image_height,
+            spp: 1,
+            offsets: vec![offset],
+            nearest: vec![0],
+            color: vec![Vec3::ZERO],
+            depth: vec![f32::INFINITY],
+            normal: vec![Vec3::ZERO],
+        }
+    }
+
+    /// The number of samples.
+    pub fn len(&self) -> usize {
+        self.offsets.len()
+    }
+
+    /// True when the block holds no sample.
+    pub fn is_empty(&self) -> bool {
+        self.offsets.is_empty()
+    }
+
+    /// The pixel (full-image coordinates) of `slot`.
+    #[inline]
+    pub fn pixel_of(&self, slot: usize) -> (u32, u32) {
+        let p = slot / self.spp as usize;
+        (
+            self.x0 + (p % self.width as usize) as u32,
+            self.y0 + (p / self.width as usize) as u32,
+        )
+    }
+
+    /// The screen point of `slot`'s sample, for [`Camera::generate_ray`].
+    #[inline]
+    pub fn screen_point(&self, slot: usize) -> Vec2 {
+        let (x, y) = self.pixel_of(slot);
+        Camera::sample_screen(
+            x,
+            y,
+            self.offsets[slot],
+            self.image_width,
+            self.image_height,
+        )
+    }
+
+    /// True if `slot` is its pixel's nearest-to-centre sample: the one whose hit goes into the
+    /// depth and normal images (always false when they are not kept).
+    #[inline]
+    pub fn keeps_hit(&self, slot: usize) -> bool {
+        let p = slot / self.spp as usize;
+        !self.depth.is_empty() && self.nearest[p] as usize == slot % self.spp as usize
+    }
+
+    /// Records the hit of `slot`'s ray if it is the one the depth and normal images show.
+    #[inline]
+    pub fn record_hit(&mut self, slot: usize, t: f32, normal: Vec3) {
+        if self.keeps_hit(slot) {
+            let p = slot / self.spp as usize;
+            self.depth[p] = t;
+            self.normal[p] = normal;
+        }
+    }
+}
+
+impl FilmOutput {
+    /// The frame of these pixels, made with `rays`.
+    pub fn into_frame(self, rays: RayCounts) -> Frame {
+        Frame {
+            width: self.window.width(),
+            height: self.window.height(),
+            window: self.window,
+            image_width: self.image_width,
+            image_height: self.image_height,
+            color: self.color,
+            depth: self.depth,
+            normal: self.normal,
+            samples: self.samples,
+            rays,
+            accel: None,
+            bounce_time: Vec::new(),
+            grid: None,
+        }
+    }
+}
+
+/// The samples the filter reads: per row of the sample region, the colours and offsets of its
+/// pixels (columns `x0..`, `spp` slots each).
+pub struct SampleRows<'a> {
+    /// Row `y0` first.
+    pub y0: u32,
+    pub x0: u32,
+    pub spp: u32,
+    pub rows: Vec<(&'a [Vec3], &'a [Vec2])>,
+}
+
+/// The filtered colour of pixel `(i, j)` (full-image coordinates, `j` from the top): the
+/// weighted average of the samples of pixels `i-r..=i+r` x `j-r..=j+r` that lie in the
+/// `width` x `height` image, the weights normalised over that cropped support; black if they
+/// sum to zero. The sums run over columns, then rows, then a pixel's samples in order, in `f64`
+/// (so a flat colour averaged by a box comes back exactly), the same order wherever it runs.
+pub fn filter_pixel(
+    filter: &Filter,
+    samples: &SampleRows<'_>,
+    i: u32,
+    j: u32,
+    width: u32,
+    height: u32,
+) -> Vec3 {
+    let r = filter.support_radius();
+    let (xa, xb) = (i.saturating_sub(r), i.saturating_add(r).min(width - 1));
+    let (ya, yb) = (j.saturating_sub(r), j.saturating_add(r).min(height - 1));
+    let spp = samples.spp as usize;
+    let mut acc = [0f64; 3];
+    let mut wsum = 0f64;
+    for x in xa..=xb {
+        let col = (x - samples.x0) as usize * spp;
+        let ddx = (x as i64 - i as i64) as f32 - 0.5;
+        for y in ya..=yb {
+            let (colors, offsets) = samples.rows[(y - samples.y0) as usize];
+            let ddy = (j as i64 - y as i64) as f32 - 0.5;
+            for (c, o) in colors[col..col + spp].iter().zip(&offsets[col..col + spp]) {
+                let w = filter.weight(ddx + o.x, ddy + o.y) as f64;
+                acc[0] += w * c.x as f64;
+                acc[1] += w * c.y as f64;
+                acc[2] += w * c.z as f64;
+                wsum += w;
+            }
+        }
+    }
+    if wsum > 0.0 {
+        Vec3::new(
+            (acc[0] / wsum) as f32,
+            (acc[1] / wsum) as f32,
+            (acc[2] / wsum) as f32,
+        )
+    } else {
+        Vec3::ZERO
+    }
+}
