@@ -243,7 +243,10 @@ mod tests {
                 bins[(o.y * 16.0) as usize * 16 + (o.x * 16.0) as usize] += 1;
             }
         }
-        let chi2: f64 = bins.iter().map(|&n| (n as f64 - 256.0).powi(2) / 256.0).sum();
+        let chi2: f64 = bins
+            .iter()
+            .map(|&n| (n as f64 - 256.0).powi(2) / 256.0)
+            .sum();
         assert!(chi2 < 400.0, "chi-squared {chi2}: {bins:?}");
     }
 
