@@ -35,6 +35,9 @@
 //! scene file --scene::parse--> Scene { camera, lights, materials, object tree }
 //!                          |
 //!            render::render(scene, RenderOptions) -> Frame { colour, depth, normal }
+//!                          |  film/: the image in bands of rows; each band's samples (placed
+//!                          |      by sampler.rs) traced by a tracer's closure, then filtered
+//!                          |      (filter.rs) into pixels with a halo from the next bands
 //!                          |  Tracer::Reference: reference.rs, recursive, one ray at a time,
 //!                          |      walks the object tree
 //!                          |  Tracer::Packet: geometry/ flattens the tree to SoA arrays,
@@ -47,6 +50,7 @@
 //!            output/: Frame -> PNG / TGA / PPM, EXR / PFM / HDR, written atomically; a
 //!                     crop's piece records its place and render (EXR window or sidecar)
 //!            merge.rs: pieces --checked, assembled--> the full image (`whitted merge`)
+//!            sample_images.rs: the samples and the filter drawn (-render_samples/-render_filter)
 //!
 //! one pixel again --render::trace_ray_tree--> raytree.rs: RayTree --> JSON
 //!                                        '--> witness/: witness camera render + overlay -> PNG
@@ -62,15 +66,15 @@
 //! cycle):
 //!
 //! ```text
-//! leaves       error, math, simd (the only file naming `wide`), progress
+//! leaves       error, math, simd (the only file naming `wide`), progress, filter, sampler
 //! data         packet (8-ray SoA), scene (parsed tree, cameras, textures)
 //! kernels      intersect (Hit and the primitive tests), bvh (knows no primitive)
-//! shared       shade, raytree, stats, options, frame, geometry (SoA arrays + BVH),
-//!              grid (the course's uniform grid and its picture)
+//! shared       shade, raytree, stats, options, frame, film (samples to pixels),
+//!              geometry (SoA arrays + BVH), grid (the course's uniform grid and its picture)
 //! tracers      reference (recursive), wavefront (queues and packets)
 //! front door   render (threads, picks a tracer), output (files), merge (pieces into one),
 //!              witness (ray-tree picture), heatmap (eye-ray cost picture, drawn with witness's
-//!              canvas)
+//!              canvas), sample_images (the assignment-7 pictures)
 //! commands     bench, cli (main.rs calls cli::run)
 //! ```
 //!
@@ -107,6 +111,7 @@ pub mod raytree;
 #[doc(hidden)]
 pub mod reference;
 pub mod render;
+pub mod sample_images;
 pub mod sampler;
 pub mod scene;
 #[doc(hidden)]

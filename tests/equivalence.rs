@@ -4,7 +4,9 @@
 //! another order). Checked on every scene of `scenes/`, on every A1-A4 course command (colour,
 //! depth and normal images), on every scene file of assignments 5-7 (meshes up to 40k
 //! triangles, solid textures), and on at least 100 seeded random scenes per run (meshes with
-//! vertex normals and without, some smoothed by `--smooth-normals`; colour and normal images).
+//! vertex normals and without, some smoothed by `--smooth-normals`; colour and normal images);
+//! anti-aliased (every sampler, every filter: both tracers trace the same sample rays) on every
+//! scene of ours and on at least 50 seeded random scenes.
 
 mod common;
 
@@ -13,7 +15,9 @@ use std::path::Path;
 use common::{
     Rng, assert_equivalent, assert_finite, course_dir, our_scenes, render_both, scene_files,
 };
+use whitted::filter::{Filter, Shape};
 use whitted::output::{color_image, depth_image, normal_image};
+use whitted::sampler::{Pattern, Sampler};
 use whitted::shade::ShadeOptions;
 use whitted::{RenderOptions, Scene};
 
@@ -402,4 +406,119 @@ fn every_later_course_scene_renders_the_same_with_both_tracers() {
         }
     }
     assert!(count >= 30, "only {count} scenes");
+}
+
+/// The samplers and filters the anti-aliased equivalence tests cycle through.
+fn sampling(k: u64) -> (Sampler, Filter) {
+    let patterns = [Pattern::Jittered, Pattern::Uniform, Pattern::Random];
+    let filters = [
+        Filter {
+            shape: Shape::Box,
+            size: 0.5,
+        },
+        Filter {
+            shape: Shape::Tent,
+            size: 1.5,
+        },
+        Filter {
+            shape: Shape::Gaussian,
+            size: 0.6,
+        },
+        Filter {
+            shape: Shape::Box,
+            size: 1.7,
+        },
+        Filter {
+            shape: Shape::Gaussian,
+            size: 1.7,
+        },
+        Filter {
+            shape: Shape::Tent,
+            size: 2.3,
+        },
+    ];
+    let pattern = patterns[(k % 3) as usize];
+    let count = if pattern == Pattern::Random {
+        2 + (k % 7) as u32
+    } else {
+        [4, 9][(k % 2) as usize]
+    };
+    let sampler = Sampler {
+        pattern,
+        count,
+        seed: k,
+    };
+    (sampler, filters[(k / 3 % 6) as usize])
+}
+
+#[test]
+fn every_scene_of_ours_renders_the_same_antialiased_with_both_tracers() {
+    for (k, path) in our_scenes().into_iter().enumerate() {
+        let scene = Scene::load(&path).unwrap();
+        let (sampler, filter) = sampling(k as u64);
+        let opts = RenderOptions {
+            width: 80,
+            height: 60,
+            sampler,
+            filter,
+            shade: ShadeOptions {
+                shadows: true,
+                shade_back: true,
+                bounces: 4,
+                ..ShadeOptions::default()
+            },
+            ..RenderOptions::default()
+        };
+        let (r, p) = render_both(&scene, &opts);
+        let what = format!("{} {sampler:?} {filter:?}", path.display());
+        assert_finite(&r, &what);
+        assert_finite(&p, &what);
+        assert_equivalent(&color_image(&r), &color_image(&p), &what);
+        assert_equivalent(
+            &depth_image(&r, 2.0, 30.0),
+            &depth_image(&p, 2.0, 30.0),
+            &what,
+        );
+        assert_equivalent(&normal_image(&r), &normal_image(&p), &what);
+    }
+}
+
+#[test]
+fn random_scenes_render_the_same_antialiased_with_both_tracers() {
+    let scenes_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut rendered = 0;
+    let mut seen = std::collections::BTreeSet::new();
+    for seed in 1000..1070u64 {
+        let mut rng = Rng::new(seed);
+        let text = random_scene(&mut rng);
+        let scene = match Scene::from_str(&text, &scenes_dir.join(format!("random{seed}.txt"))) {
+            Ok(s) => s,
+            Err(e) if e.to_string().contains("degenerate") => continue,
+            Err(e) => panic!("seed {seed}: {e}\n{text}"),
+        };
+        let (sampler, filter) = sampling(seed);
+        seen.insert((sampler.pattern.name(), filter.shape.name()));
+        let opts = RenderOptions {
+            width: 32,
+            height: 24,
+            sampler,
+            filter,
+            shade: ShadeOptions {
+                shadows: rng.chance(0.8),
+                shade_back: rng.chance(0.7),
+                bounces: rng.below(5),
+                transparent_shadows: rng.chance(0.3),
+                ..ShadeOptions::default()
+            },
+            ..RenderOptions::default()
+        };
+        let (r, p) = render_both(&scene, &opts);
+        let what = format!("seed {seed} {sampler:?} {filter:?}\n{text}");
+        assert_finite(&r, &what);
+        assert_finite(&p, &what);
+        assert_equivalent(&color_image(&r), &color_image(&p), &what);
+        rendered += 1;
+    }
+    assert!(rendered >= 50, "only {rendered} random scenes parsed");
+    assert_eq!(seen.len(), 9, "every sampler with every filter: {seen:?}");
 }

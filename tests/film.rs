@@ -1,0 +1,236 @@
+//! Claim: the streamed film makes the image a whole film would. Every pixel equals the
+//! weighted average of the samples of its support computed directly from all samples at once
+//! (bit for bit, on small images with filters whose halo crosses several bands, windows of odd
+//! sizes, both tracers); a uniform-sampled, box-filtered flat-coloured scene equals its
+//! 1-sample image; a pixel whose weights are all zero is black; the depth and normal images
+//! show the sample nearest the pixel centre.
+
+mod common;
+
+use std::path::Path;
+
+use whitted::filter::{Filter, Shape};
+use whitted::math::Vec3;
+use whitted::output::{color_image, depth_image, normal_image};
+use whitted::sampler::{Pattern, Sampler};
+use whitted::shade::ShadeOptions;
+use whitted::{Frame, RenderOptions, Scene, Tracer};
+
+fn scene(name: &str) -> Scene {
+    Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("scenes")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn sampler(pattern: Pattern, count: u32) -> Sampler {
+    Sampler {
+        pattern,
+        count,
+        seed: 7,
+    }
+}
+
+fn filter(shape: Shape, size: f32) -> Filter {
+    Filter { shape, size }
+}
+
+/// Pixel `(i, j)` computed from all of `frame`'s kept samples at once, straight from the
+/// definition: columns, then rows, then samples; the support cropped at the border.
+fn whole_film_pixel(frame: &Frame, s: &Sampler, f: &Filter, i: i64, j: i64) -> Vec3 {
+    let (w, h) = (frame.width as i64, frame.height as i64);
+    let r = f.support_radius() as i64;
+    let n = s.count as usize;
+    let (mut acc, mut wsum) = ([0f64; 3], 0f64);
+    for x in (i - r).max(0)..=(i + r).min(w - 1) {
+        for y in (j - r).max(0)..=(j + r).min(h - 1) {
+            for k in 0..n {
+                let o = s.offset(x as u32, y as u32, k as u32);
+                let c = frame.samples[(y * w + x) as usize * n + k];
+                let wt = f.weight((x - i) as f32 - 0.5 + o.x, (j - y) as f32 - 0.5 + o.y) as f64;
+                acc[0] += wt * c.x as f64;
+                acc[1] += wt * c.y as f64;
+                acc[2] += wt * c.z as f64;
+                wsum += wt;
+            }
+        }
+    }
+    if wsum > 0.0 {
+        Vec3::new(
+            (acc[0] / wsum) as f32,
+            (acc[1] / wsum) as f32,
+            (acc[2] / wsum) as f32,
+        )
+    } else {
+        Vec3::ZERO
+    }
+}
+
+#[test]
+fn the_streamed_film_equals_the_whole_film() {
+    let scene = scene("showcase.txt");
+    let cases = [
+        (
+            23,
+            17,
+            sampler(Pattern::Jittered, 4),
+            filter(Shape::Gaussian, 1.7),
+        ),
+        (
+            9,
+            41,
+            sampler(Pattern::Random, 5),
+            filter(Shape::Gaussian, 2.3),
+        ),
+        (
+            40,
+            9,
+            sampler(Pattern::Uniform, 9),
+            filter(Shape::Tent, 2.3),
+        ),
+        (
+            1,
+            30,
+            sampler(Pattern::Jittered, 9),
+            filter(Shape::Box, 1.7),
+        ),
+        (31, 1, sampler(Pattern::Random, 3), filter(Shape::Tent, 1.5)),
+        (
+            16,
+            16,
+            sampler(Pattern::Uniform, 1),
+            filter(Shape::Gaussian, 4.0),
+        ),
+        (
+            12,
+            12,
+            sampler(Pattern::Jittered, 16),
+            filter(Shape::Box, 0.5),
+        ),
+    ];
+    for (w, h, s, f) in cases {
+        for tracer in [Tracer::Packet, Tracer::Reference] {
+            let opts = RenderOptions {
+                width: w,
+                height: h,
+                sampler: s,
+                filter: f,
+                keep_samples: true,
+                tracer,
+                threads: 2,
+                shade: ShadeOptions {
+                    shadows: true,
+                    bounces: 3,
+                    ..ShadeOptions::default()
+                },
+                ..RenderOptions::default()
+            };
+            let frame = whitted::render(&scene, &opts).unwrap();
+            assert_eq!(frame.samples.len(), (w * h * s.count) as usize);
+            for j in 0..h as i64 {
+                for i in 0..w as i64 {
+                    let want = whole_film_pixel(&frame, &s, &f, i, j);
+                    let got = frame.color[(j * w as i64 + i) as usize];
+                    assert_eq!(got, want, "{w}x{h} {s:?} {f:?} {tracer:?} pixel ({i}, {j})");
+                }
+            }
+        }
+    }
+}
+
+/// A flat colour filling the view: a plane lit by ambient light only, a background around it.
+const FLAT: &str = "
+OrthographicCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 size 5 }
+Lights { numLights 0 }
+Background { color 0.4 0.2 0.8 ambientLight 0.6 0.3 0.9 }
+Materials { numMaterials 1 PhongMaterial { diffuseColor 0.5 0.7 0.3 } }
+Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }
+";
+
+#[test]
+fn a_flat_scene_sampled_uniformly_through_a_box_is_its_one_sample_image() {
+    let empty = FLAT.replace(
+        "Group { numObjects 1 MaterialIndex 0 Plane { normal 0 0 1 offset 0 } }",
+        "Group { numObjects 0 }",
+    );
+    for text in [FLAT.to_string(), empty] {
+        let scene = Scene::from_str(&text, Path::new("flat.txt")).unwrap();
+        for tracer in [Tracer::Packet, Tracer::Reference] {
+            let one = RenderOptions {
+                width: 19,
+                height: 13,
+                tracer,
+                ..RenderOptions::default()
+            };
+            let base = color_image(&whitted::render(&scene, &one).unwrap());
+            for count in [4, 9, 16, 36] {
+                for size in [0.5, 1.0, 1.7, 2.3] {
+                    let opts = RenderOptions {
+                        sampler: sampler(Pattern::Uniform, count),
+                        filter: filter(Shape::Box, size),
+                        ..one.clone()
+                    };
+                    let img = color_image(&whitted::render(&scene, &opts).unwrap());
+                    assert!(img == base, "{tracer:?} uniform {count} box {size}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn a_pixel_without_weight_is_black() {
+    let scene = Scene::from_str(FLAT, Path::new("flat.txt")).unwrap();
+    // Uniform 4 puts the samples 0.25 from the centre on both axes: a box of radius 0.2 and a
+    // tent of radius 0.3 (0.354 away) weigh them all zero.
+    for f in [filter(Shape::Box, 0.2), filter(Shape::Tent, 0.3)] {
+        let opts = RenderOptions {
+            width: 5,
+            height: 4,
+            sampler: sampler(Pattern::Uniform, 4),
+            filter: f,
+            ..RenderOptions::default()
+        };
+        let frame = whitted::render(&scene, &opts).unwrap();
+        assert!(frame.color.iter().all(|c| *c == Vec3::ZERO), "{f:?}");
+    }
+}
+
+#[test]
+fn depth_and_normals_show_the_sample_nearest_the_centre() {
+    let scene = scene("showcase.txt");
+    for tracer in [Tracer::Packet, Tracer::Reference] {
+        let one = RenderOptions {
+            width: 40,
+            height: 30,
+            tracer,
+            ..RenderOptions::default()
+        };
+        let base = whitted::render(&scene, &one).unwrap();
+        // Uniform 9's middle sample is the pixel centre, whatever the filter.
+        let nine = RenderOptions {
+            sampler: sampler(Pattern::Uniform, 9),
+            filter: filter(Shape::Gaussian, 1.0),
+            ..one.clone()
+        };
+        let frame = whitted::render(&scene, &nine).unwrap();
+        assert_eq!(frame.depth, base.depth, "{tracer:?}");
+        assert_eq!(frame.normal, base.normal, "{tracer:?}");
+        assert!(
+            frame.color != base.color,
+            "{tracer:?}: the colour is filtered"
+        );
+        assert!(depth_image(&frame, 5.0, 20.0) == depth_image(&base, 5.0, 20.0));
+        assert!(normal_image(&frame) == normal_image(&base));
+        // Without depth and normals, the frame keeps none and the colour is unchanged.
+        let lean = RenderOptions {
+            depth_normal: false,
+            ..nine
+        };
+        let colour_only = whitted::render(&scene, &lean).unwrap();
+        assert!(colour_only.depth.is_empty() && colour_only.normal.is_empty());
+        assert_eq!(colour_only.color, frame.color);
+    }
+}
