@@ -38,14 +38,14 @@ fn filter(shape: Shape, size: f32) -> Filter {
 }
 
 /// Pixel `(i, j)` computed from all of `frame`'s kept samples at once, straight from the
-/// definition: columns, then rows, then samples; the support cropped at the border.
+/// definition: rows, then columns, then samples; the support cropped at the border.
 fn whole_film_pixel(frame: &Frame, s: &Sampler, f: &Filter, i: i64, j: i64) -> Vec3 {
     let (w, h) = (frame.width as i64, frame.height as i64);
     let r = f.support_radius() as i64;
     let n = s.count as usize;
     let (mut acc, mut wsum) = ([0f64; 3], 0f64);
-    for x in (i - r).max(0)..=(i + r).min(w - 1) {
-        for y in (j - r).max(0)..=(j + r).min(h - 1) {
+    for y in (j - r).max(0)..=(j + r).min(h - 1) {
+        for x in (i - r).max(0)..=(i + r).min(w - 1) {
             for k in 0..n {
                 let o = s.offset(x as u32, y as u32, k as u32);
                 let c = frame.samples[(y * w + x) as usize * n + k];

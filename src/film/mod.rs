@@ -2,7 +2,7 @@
 //! pixels. A tracer's frame loop hands [`render_film`] a closure that traces one
 //! [`SampleBlock`] (a band of rows of the image, every sample of every pixel, their offsets set
 //! by the [`Sampler`]); the film streams the image band by band and makes each output pixel the
-//! normalised, filtered average of the samples around it ([`filter_pixel`]), with a halo of `r`
+//! normalised, filtered average of the samples around it ([`filter_rows`]), with a halo of `r`
 //! rows taken from the neighbouring bands. Nothing grows with width x height x samples: only the
 //! bands in flight hold samples. Between the tracers (which call it) and the sampler, filter
 //! and camera (which it calls).
@@ -21,6 +21,8 @@
 mod stream;
 
 pub use stream::{BAND_ROWS, FilmOutput, render_film};
+
+use std::ops::Range;
 
 use crate::filter::Filter;
 use crate::frame::Frame;
@@ -242,8 +244,8 @@ impl FilmOutput {
     }
 }
 
-/// The samples the filter reads: per row of the sample region, the colours and offsets of its
-/// pixels (columns `x0..`, `spp` slots each).
+/// The samples the filter reads: per row of the sample region (row `y0` first), the colours
+/// and offsets of its pixels (columns `x0..`, `spp` slots each).
 pub struct SampleRows<'a> {
     /// Row `y0` first.
     pub y0: u32,
@@ -252,45 +254,113 @@ pub struct SampleRows<'a> {
     pub rows: Vec<(&'a [Vec3], &'a [Vec2])>,
 }
 
-/// The filtered colour of pixel `(i, j)` (full-image coordinates, `j` from the top): the
-/// weighted average of the samples of pixels `i-r..=i+r` x `j-r..=j+r` that lie in the
-/// `width` x `height` image, the weights normalised over that cropped support; black if they
-/// sum to zero. The sums run over columns, then rows, then a pixel's samples in order, in `f64`
-/// (so a flat colour averaged by a box comes back exactly), the same order wherever it runs.
-pub fn filter_pixel(
+/// Filters the pixels `cols` x `rows` (full-image coordinates, rows from the top) of a
+/// `width` x `height` image from `samples` (which hold every sample row and column within the
+/// support radius `r` of them) into `out`, row by row. Pixel `(i, j)` is the weighted average
+/// of the samples of pixels `i-r..=i+r` x `j-r..=j+r` that lie in the image, the weights
+/// normalised over that cropped support; black if they sum to zero.
+///
+/// Each sample is visited once: its axis terms ([`Filter::axis`]) are computed for the
+/// columns and the rows it reaches and combined for each pixel, and its weighted colour added to
+/// that pixel's sums. A pixel's sums so run over its support's samples by row, then column, then
+/// sample index, in `f64` (so a flat colour averaged by a box comes back exactly), in the same
+/// order wherever the pixel is made.
+pub fn filter_rows(
     filter: &Filter,
     samples: &SampleRows<'_>,
-    i: u32,
-    j: u32,
+    cols: Range<u32>,
+    rows: Range<u32>,
     width: u32,
     height: u32,
-) -> Vec3 {
+    out: &mut [Vec3],
+) {
     let r = filter.support_radius();
-    let (xa, xb) = (i.saturating_sub(r), i.saturating_add(r).min(width - 1));
-    let (ya, yb) = (j.saturating_sub(r), j.saturating_add(r).min(height - 1));
-    let spp = samples.spp as usize;
-    let mut acc = [0f64; 3];
-    let mut wsum = 0f64;
-    for x in xa..=xb {
-        let col = (x - samples.x0) as usize * spp;
-        let ddx = (x as i64 - i as i64) as f32 - 0.5;
-        for y in ya..=yb {
+    let (nw, spp) = (cols.len(), samples.spp as usize);
+    debug_assert_eq!(out.len(), nw * rows.len());
+    if r == 0 {
+        // Each pixel is made of its own samples alone: the same sums, without the scatter.
+        for (y, row) in rows.clone().zip(out.chunks_exact_mut(nw)) {
             let (colors, offsets) = samples.rows[(y - samples.y0) as usize];
-            let ddy = (j as i64 - y as i64) as f32 - 0.5;
-            for (c, o) in colors[col..col + spp].iter().zip(&offsets[col..col + spp]) {
-                let w = filter.weight(ddx + o.x, ddy + o.y) as f64;
-                acc[0] += w * c.x as f64;
-                acc[1] += w * c.y as f64;
-                acc[2] += w * c.z as f64;
-                wsum += w;
+            for (x, o) in cols.clone().zip(row.iter_mut()) {
+                let first = (x - samples.x0) as usize * spp;
+                let mut a = [0f64; 4];
+                for (c, o) in colors[first..first + spp]
+                    .iter()
+                    .zip(&offsets[first..first + spp])
+                {
+                    let w = filter.combine(filter.axis(o.x - 0.5), filter.axis(o.y - 0.5)) as f64;
+                    accumulate(&mut a, w, c);
+                }
+                *o = normalised(&a);
+            }
+        }
+        return;
+    }
+    let mut acc = vec![[0f64; 4]; out.len()];
+    let mut ax = vec![0f64; 2 * r as usize + 1];
+    let mut ay = vec![0f64; 2 * r as usize + 1];
+    let sample_cols = cols.start.saturating_sub(r)..cols.end.saturating_add(r).min(width);
+    let sample_rows = rows.start.saturating_sub(r)..rows.end.saturating_add(r).min(height);
+    for y in sample_rows {
+        let (colors, offsets) = samples.rows[(y - samples.y0) as usize];
+        let (ja, jb) = (
+            y.saturating_sub(r).max(rows.start),
+            (y + r).min(rows.end - 1),
+        );
+        if ja > jb {
+            continue;
+        }
+        for x in sample_cols.clone() {
+            let (ia, ib) = (
+                x.saturating_sub(r).max(cols.start),
+                (x + r).min(cols.end - 1),
+            );
+            if ia > ib {
+                continue;
+            }
+            let first = (x - samples.x0) as usize * spp;
+            for (c, o) in colors[first..first + spp]
+                .iter()
+                .zip(&offsets[first..first + spp])
+            {
+                for (k, i) in (ia..=ib).enumerate() {
+                    ax[k] = filter.axis((x as i64 - i as i64) as f32 - 0.5 + o.x);
+                }
+                for (k, j) in (ja..=jb).enumerate() {
+                    ay[k] = filter.axis((j as i64 - y as i64) as f32 - 0.5 + o.y);
+                }
+                for (kj, j) in (ja..=jb).enumerate() {
+                    let row = (j - rows.start) as usize * nw;
+                    for (ki, i) in (ia..=ib).enumerate() {
+                        let w = filter.combine(ax[ki], ay[kj]) as f64;
+                        accumulate(&mut acc[row + (i - cols.start) as usize], w, c);
+                    }
+                }
             }
         }
     }
-    if wsum > 0.0 {
+    for (o, a) in out.iter_mut().zip(&acc) {
+        *o = normalised(a);
+    }
+}
+
+/// Adds a sample of colour `c` and weight `w` to the sums `a` (colour, then weight).
+#[inline]
+fn accumulate(a: &mut [f64; 4], w: f64, c: &Vec3) {
+    a[0] += w * c.x as f64;
+    a[1] += w * c.y as f64;
+    a[2] += w * c.z as f64;
+    a[3] += w;
+}
+
+/// The weighted average of the sums `a`; black when the weights sum to zero.
+#[inline]
+fn normalised(a: &[f64; 4]) -> Vec3 {
+    if a[3] > 0.0 {
         Vec3::new(
-            (acc[0] / wsum) as f32,
-            (acc[1] / wsum) as f32,
-            (acc[2] / wsum) as f32,
+            (a[0] / a[3]) as f32,
+            (a[1] / a[3]) as f32,
+            (a[2] / a[3]) as f32,
         )
     } else {
         Vec3::ZERO

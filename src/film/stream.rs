@@ -12,14 +12,14 @@
 //!
 //! The bytes do not depend on the thread count or on which thread did what: a band's samples
 //! are a function of the band, and an output pixel a function of the samples (one fixed
-//! summation order, [`super::filter_pixel`]).
+//! summation order, [`super::filter_rows`]).
 
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
-use super::{FilmSpec, SampleBlock, SampleRows, filter_pixel};
+use super::{FilmSpec, SampleBlock, SampleRows, filter_rows};
 use crate::error::Result;
 use crate::math::Vec3;
 use crate::options::{Progress, Window};
@@ -305,23 +305,24 @@ fn filter_band(plan: &Plan, m: u32, bands: &[Arc<SampleBlock>], out: &mut OutRow
         }
     }
     let ww = w.width() as usize;
-    for (ry, y) in plan.output_rows(m).enumerate() {
+    let out_rows = plan.output_rows(m);
+    filter_rows(
+        &spec.filter,
+        &rows,
+        w.x0..w.x1,
+        out_rows.clone(),
+        spec.image_width,
+        spec.image_height,
+        out.color,
+    );
+    for (ry, y) in out_rows.enumerate() {
         let band = bands
             .iter()
             .find(|b| (b.y0..b.y0 + b.rows).contains(&y))
             .expect("the band of an output row");
         let brow = (y - band.y0) as usize * region.width() as usize;
         for (rx, x) in (w.x0..w.x1).enumerate() {
-            let i = ry * ww + rx;
-            out.color[i] = filter_pixel(
-                &spec.filter,
-                &rows,
-                x,
-                y,
-                spec.image_width,
-                spec.image_height,
-            );
-            let p = brow + (x - region.x0) as usize;
+            let (i, p) = (ry * ww + rx, brow + (x - region.x0) as usize);
             if !out.depth.is_empty() {
                 out.depth[i] = band.depth[p];
                 out.normal[i] = band.normal[p];
