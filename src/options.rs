@@ -343,7 +343,11 @@ pub fn memory_bytes(opts: &RenderOptions) -> u128 {
     let window = opts.window();
     let pixels = window.pixels() as u128;
     let spp = opts.sampler.count as u128;
-    let aux = if opts.depth_normal { BYTES_PER_PIXEL_AUX } else { 0 } as u128;
+    let aux = if opts.depth_normal {
+        BYTES_PER_PIXEL_AUX
+    } else {
+        0
+    } as u128;
     let kept = if opts.keep_samples { 12 * spp } else { 0 };
     let threads = match opts.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),

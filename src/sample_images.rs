@@ -59,7 +59,8 @@ impl Canvas {
 
 /// The `-render_samples` picture of `frame`, zoomed `zoom` times: every sample a dot of its own
 /// colour at its place in its pixel (later samples of a pixel over earlier ones). `frame` must
-/// have kept its samples ([`crate::RenderOptions::keep_samples`]) made with `sampler`.
+/// have kept its samples ([`crate::RenderOptions::keep_samples`]) made with `sampler`. A crop's
+/// frame gives the picture of its window (the checkerboard's parity is the full image's).
 pub fn render_samples(frame: &Frame, sampler: &Sampler, zoom: u32) -> Rgb8 {
     let (w, h, z) = (frame.width as usize, frame.height as usize, zoom as usize);
     let spp = sampler.count as usize;
@@ -69,10 +70,14 @@ pub fn render_samples(frame: &Frame, sampler: &Sampler, zoom: u32) -> Rgb8 {
         "render_samples needs a frame that kept its samples"
     );
     let mut canvas = Canvas::new(w * z, h * z, Vec3::ZERO);
+    // Pixel (i, y) of the frame is pixel (x0 + i, y0 + y) of the image, row j_image from the
+    // bottom of the image.
+    let (x0, y0) = (frame.window.x0 as usize, frame.window.y0 as usize);
+    let image_row_up = |y: usize| frame.image_height as usize - 1 - (y0 + y);
     for y in 0..h {
         let j = h - 1 - y;
         for i in 0..w {
-            if (i + j) % 2 == 0 {
+            if (x0 + i + image_row_up(y)) % 2 == 0 {
                 for y2 in 0..z {
                     for x2 in 0..z {
                         canvas.set(i * z + x2, j * z + y2, Vec3::splat(CHECKER));
@@ -86,7 +91,7 @@ pub fn render_samples(frame: &Frame, sampler: &Sampler, zoom: u32) -> Rgb8 {
         for i in 0..w {
             let p = y * w + i;
             for s in 0..spp {
-                let o = sampler.offset(i as u32, y as u32, s as u32);
+                let o = sampler.offset((x0 + i) as u32, (y0 + y) as u32, s as u32);
                 let dot_x = (((i as f64 + o.x as f64) * z as f64) as usize).min(w * z - 1);
                 let dot_y = (((j as f64 + o.y as f64) * z as f64) as usize).min(h * z - 1);
                 canvas.set(dot_x, dot_y, frame.samples[p * spp + s]);

@@ -304,6 +304,10 @@ fn sample_values(name: &str) -> &'static [&'static str] {
         "witness_angle" => &["45"],
         "tessellation" => &["10", "20"],
         "grid" => &["4", "5", "6"],
+        "uniform_samples" | "jittered_samples" => &["9"],
+        "random_samples" => &["5"],
+        "box_filter" | "tent_filter" | "gaussian_filter" => &["1.5"],
+        "render_samples" | "render_filter" => &["p.png", "3"],
         _ => &[],
     }
 }

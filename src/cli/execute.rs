@@ -1,5 +1,6 @@
 //! Running a parsed `whitted render` command: load the scene, render (with a progress bar on
-//! a terminal), write the images, then the optional heatmap, the optional ray tree of one pixel
+//! a terminal), write the images (and assignment 7's pictures of the samples and the filter),
+//! then the optional heatmap, the optional ray tree of one pixel
 //! and its witness picture, then `--stats`. Reads the [`Command`] of `render.rs`.
 
 use std::path::{Path, PathBuf};
@@ -13,6 +14,7 @@ use crate::output::{self, ImageKind, piece::RenderFingerprint};
 use crate::progress::RowBar;
 use crate::raytree::TreeSource;
 use crate::render;
+use crate::sample_images;
 use crate::scene::Scene;
 use crate::stats::{RayCounts, StatsReport, peak_memory_kib};
 use crate::witness;
@@ -48,6 +50,15 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     if let Some(out) = &cmd.heatmap {
         output::check_writable(out, w, h + heatmap::legend_height(w))?;
     }
+    let sampling = &cmd.sampling;
+    if let Some((file, zoom)) = &sampling.render_samples {
+        let side = |n: u32| n.saturating_mul(*zoom);
+        output::check_writable(file, side(win.width()), side(win.height()))?;
+    }
+    if let Some((file, zoom)) = &sampling.render_filter {
+        let side = |n: u32| n.saturating_mul(*zoom).saturating_add(1);
+        output::check_writable(file, side(w), side(h))?;
+    }
     if let Some((_, _, json)) = &cmd.ray_tree {
         output::check_creatable(json, "write ray tree")?;
     }
@@ -58,13 +69,27 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         scene.smooth_normals();
     }
     phases.push(("parse", t0.elapsed()));
-    if outputs.is_empty() && cmd.ray_tree.is_none() && cmd.heatmap.is_none() {
+    let traced = !outputs.is_empty() || sampling.render_samples.is_some();
+    if !traced
+        && cmd.ray_tree.is_none()
+        && cmd.heatmap.is_none()
+        && sampling.render_filter.is_none()
+    {
         eprintln!("note: no -output, -depth or -normals given: the scene parsed, nothing to write");
         return Ok(());
     }
     let mut rays = RayCounts::default();
     let (mut accel, mut bounce_time, mut grid) = (None, Vec::new(), None);
-    if !outputs.is_empty() {
+    let mut files = Vec::new();
+    if let Some((file, zoom)) = &sampling.render_filter {
+        // The filter's picture depends on the filter and the image size alone: nothing to trace.
+        let picture = sample_images::render_filter(w, h, *zoom, &cmd.render.filter);
+        files.push((
+            file.clone(),
+            output::encode(&picture, output::Format::for_path(file)?)?,
+        ));
+    }
+    if traced {
         let t1 = Instant::now();
         let bar = RowBar::new("render", win.height());
         let frame = render::render_with_progress(&scene, &cmd.render, &|rows| bar.rows_done(rows))?;
@@ -81,16 +106,26 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             }),
             cmd.normals.as_ref().map(|p| (ImageKind::Normals, p)),
         ];
-        let mut files = Vec::new();
         for (kind, path) in images.into_iter().flatten() {
             files.extend(output::frame_files(&frame, kind, path, &print.of(kind))?);
         }
+        if let Some((file, zoom)) = &sampling.render_samples {
+            let picture = sample_images::render_samples(&frame, &cmd.render.sampler, *zoom);
+            files.push((
+                file.clone(),
+                output::encode(&picture, output::Format::for_path(file)?)?,
+            ));
+        }
         output::write_files(&files)?;
+        files.clear();
         phases.push(("write", t2.elapsed()));
         rays = frame.rays;
         accel = frame.accel;
         bounce_time = frame.bounce_time;
         grid = frame.grid;
+    }
+    if !files.is_empty() {
+        output::write_files(&files)?;
     }
     if let Some(out) = &cmd.heatmap {
         let t4 = Instant::now();
@@ -176,7 +211,14 @@ fn write_ray_tree(cmd: &Command, scene: &Scene, x: u32, y: u32, json: &Path) -> 
         ..scene.clone()
     };
     let bar = RowBar::new("witness", opts.height);
-    let frame = render::render_with_progress(&witness_scene, opts, &|rows| bar.rows_done(rows))?;
+    // The picture hides what lies behind the witness frame's surfaces: it needs their depths.
+    let witness_opts = RenderOptions {
+        depth_normal: true,
+        keep_samples: false,
+        ..opts.clone()
+    };
+    let frame =
+        render::render_with_progress(&witness_scene, &witness_opts, &|rows| bar.rows_done(rows))?;
     bar.finish();
     let title = format!("ray tree of pixel ({x}, {y})");
     let picture = witness::draw_ray_tree(

@@ -31,6 +31,7 @@ mod execute;
 pub mod merge;
 pub mod render;
 mod render_options;
+mod sampling_options;
 pub mod table;
 pub mod tiles;
 

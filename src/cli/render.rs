@@ -6,6 +6,7 @@
 use std::path::{Component, Path, PathBuf};
 
 pub use super::render_options::{Command, OPTIONS};
+use super::sampling_options::Sampling;
 use super::table::{self, Parsed};
 use crate::error::{Error, Result};
 use crate::options::{self, GridOptions, Window};
@@ -59,6 +60,10 @@ pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command
     if table::parse(&OPTIONS, args, &mut cmd, positional)? == Parsed::Help {
         return Ok(None);
     }
+    (cmd.render.sampler, cmd.render.filter) = cmd.sampling.resolve()?;
+    // Depth and normals cost 16 bytes a pixel: keep them only for the images that show them.
+    cmd.render.depth_normal = cmd.depth.is_some() || cmd.normals.is_some();
+    cmd.render.keep_samples = cmd.sampling.render_samples.is_some();
     check(&cmd, modern)?;
     cmd.render.grid = grid_options(&cmd)?;
     if let Some((i, n)) = cmd.tile {
@@ -69,6 +74,12 @@ pub fn parse_render_args(args: &[String], modern: bool) -> Result<Option<Command
             ));
         }
         cmd.render.crop = Some(Window::tile(i, n, cmd.render.width, cmd.render.height)?);
+    }
+    if let (Some((_, typed)), true) = (&cmd.grid_view, cmd.sampling != Sampling::default()) {
+        return Err(Error::Usage(format!(
+            "option {typed} draws the grid with one ray per pixel: expected no sampling, \
+             filter or sample picture options with it"
+        )));
     }
     if cmd.render.crop.is_some() && cmd.render.grid.is_some_and(|g| g.view.is_some()) {
         return Err(Error::Usage(
@@ -117,11 +128,23 @@ fn check(cmd: &Command, modern: bool) -> Result<()> {
         && cmd.normals.is_none()
         && cmd.ray_tree.is_none()
         && cmd.heatmap.is_none()
+        && cmd.sampling.render_samples.is_none()
+        && cmd.sampling.render_filter.is_none()
     {
         return Err(Error::Usage(
-            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree/--heatmap)"
+            "expected an output file: -o OUT.png (or --depth/--normals/--ray-tree/--heatmap/\
+             --render-samples/--render-filter)"
                 .to_string(),
         ));
+    }
+    for (option, picture, extra) in [
+        ("--render-samples", &cmd.sampling.render_samples, 0),
+        ("--render-filter", &cmd.sampling.render_filter, 1),
+    ] {
+        if let Some((_, zoom)) = picture {
+            let spelling = OPTIONS.get(option).map_or(option, |o| o.spelling(!modern));
+            check_picture(spelling, &cmd.render, *zoom, extra)?;
+        }
     }
     if cmd.ray_tree_image.is_some() && cmd.ray_tree.is_none() {
         return Err(Error::Usage(
@@ -135,6 +158,23 @@ fn check(cmd: &Command, modern: bool) -> Result<()> {
     check_distinct_outputs(cmd, !modern)
 }
 
+/// Refuses a picture of the image zoomed `zoom` times (plus `extra` pixels on each axis) with
+/// more pixels than `--max-pixels` allows.
+fn check_picture(option: &str, opts: &options::RenderOptions, zoom: u32, extra: u64) -> Result<()> {
+    let (w, h) = (
+        opts.width as u64 * zoom as u64 + extra,
+        opts.height as u64 * zoom as u64 + extra,
+    );
+    if w.saturating_mul(h) > opts.max_pixels || w > u32::MAX as u64 || h > u32::MAX as u64 {
+        return Err(Error::Limit(format!(
+            "option {option}: a {}x{} image zoomed {zoom} times is {w}x{h} pixels, over the limit \
+             of {} (raise it with --max-pixels N)",
+            opts.width, opts.height, opts.max_pixels
+        )));
+    }
+    Ok(())
+}
+
 /// Refuses one file given for two outputs (the second write would replace the first).
 fn check_distinct_outputs(cmd: &Command, course_style: bool) -> Result<()> {
     let outputs: Vec<(&str, &Path)> = [
@@ -144,6 +184,14 @@ fn check_distinct_outputs(cmd: &Command, course_style: bool) -> Result<()> {
         ("--ray-tree", cmd.ray_tree.as_ref().map(|r| r.2.as_path())),
         ("--ray-tree-image", cmd.ray_tree_image.as_deref()),
         ("--heatmap", cmd.heatmap.as_deref()),
+        (
+            "--render-samples",
+            cmd.sampling.render_samples.as_ref().map(|p| p.0.as_path()),
+        ),
+        (
+            "--render-filter",
+            cmd.sampling.render_filter.as_ref().map(|p| p.0.as_path()),
+        ),
     ]
     .into_iter()
     .filter_map(|(option, path)| {

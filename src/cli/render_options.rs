@@ -4,8 +4,9 @@
 
 use std::path::PathBuf;
 
+use super::sampling_options::{self as sampling, Sampling};
 use super::table::{Opt, Table, Values};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::math::Vec3;
 use crate::options::{self, GridView, RenderOptions, Tracer, Window};
 use crate::witness::{WitnessPlace, WitnessSpec};
@@ -40,6 +41,8 @@ pub struct Command {
     pub notes: Vec<String>,
     /// `--tile I/N`, turned into `render.crop` once the image size is known.
     pub tile: Option<(u32, u32)>,
+    /// The anti-aliasing options as given (`render` holds the sampler and filter they make).
+    pub sampling: Sampling,
 }
 
 impl Command {
@@ -66,6 +69,7 @@ impl Command {
             max_grid_cells: options::DEFAULT_MAX_GRID_CELLS,
             notes: Vec::new(),
             tile: None,
+            sampling: Sampling::default(),
         }
     }
 }
@@ -78,7 +82,6 @@ const RAY_TREE: &str = "RAY TREE (every ray one pixel spawns; -o is optional wit
 const GRID: &str =
     "GRID (the course's uniform grid, assignments 5-6; whitted still renders with its BVH)";
 const COURSE: &str = "COURSE OPTIONS (single dash, as in the handouts)";
-const NOT_YET: &str = "NOT SUPPORTED YET (refused with an error)";
 
 /// The extensions of image files, refused as ray-tree JSON paths.
 const IMAGE_EXTENSIONS: [&str; 15] = [
@@ -93,14 +96,6 @@ fn no_preview(c: &mut Command, v: &mut Values) -> Result<()> {
         v.option()
     ));
     Ok(())
-}
-
-/// The refusal of assignment 7's options.
-fn sampling(_: &mut Command, v: &mut Values) -> Result<()> {
-    Err(Error::Usage(format!(
-        "option {} (assignment 7 sampling and filtering) is not supported yet",
-        v.option()
-    )))
 }
 
 /// Every option of `whitted render` and of the course's command lines, in `--help` order.
@@ -409,6 +404,20 @@ pub static OPTIONS: Table<Command> = Table {
                 Ok(())
             },
         },
+        sampling::SAMPLES,
+        sampling::SAMPLER,
+        sampling::UNIFORM_SAMPLES,
+        sampling::JITTERED_SAMPLES,
+        sampling::RANDOM_SAMPLES,
+        sampling::SEED,
+        sampling::FILTER,
+        sampling::BOX_FILTER,
+        sampling::TENT_FILTER,
+        sampling::GAUSSIAN_FILTER,
+        sampling::RENDER_SAMPLES,
+        sampling::RENDER_FILTER,
+        sampling::MAX_SAMPLES,
+        sampling::MAX_FILTER_RADIUS,
         Opt {
             long: "--ray-tree",
             course: "",
@@ -606,78 +615,6 @@ pub static OPTIONS: Table<Command> = Table {
             section: COURSE,
             help: "accepted with a note (the preview's smooth shading)",
             apply: no_preview,
-        },
-        Opt {
-            long: "",
-            course: "-random_samples",
-            short: "",
-            values: &[("N", "a sample count")],
-            section: NOT_YET,
-            help: "assignment 7: N random samples per pixel",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-uniform_samples",
-            short: "",
-            values: &[("N", "a sample count")],
-            section: NOT_YET,
-            help: "assignment 7: N samples per pixel on a grid",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-jittered_samples",
-            short: "",
-            values: &[("N", "a sample count")],
-            section: NOT_YET,
-            help: "assignment 7: N jittered samples per pixel",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-box_filter",
-            short: "",
-            values: &[("RADIUS", "a filter radius")],
-            section: NOT_YET,
-            help: "assignment 7: box filter",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-tent_filter",
-            short: "",
-            values: &[("RADIUS", "a filter radius")],
-            section: NOT_YET,
-            help: "assignment 7: tent filter",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-gaussian_filter",
-            short: "",
-            values: &[("SIGMA", "a filter width")],
-            section: NOT_YET,
-            help: "assignment 7: Gaussian filter",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-render_samples",
-            short: "",
-            values: &[("FILE", "a file name"), ("ZOOM", "a zoom factor")],
-            section: NOT_YET,
-            help: "assignment 7: picture of the samples",
-            apply: sampling,
-        },
-        Opt {
-            long: "",
-            course: "-render_filter",
-            short: "",
-            values: &[("FILE", "a file name"), ("ZOOM", "a zoom factor")],
-            section: NOT_YET,
-            help: "assignment 7: picture of the filter",
-            apply: sampling,
         },
     ],
 };

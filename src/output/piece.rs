@@ -152,12 +152,17 @@ pub struct RenderFingerprint(Fnv1a);
 impl RenderFingerprint {
     /// Hashes `scene` rendered with `opts`.
     pub fn new(scene: &Scene, opts: &RenderOptions) -> RenderFingerprint {
-        // What does not decide pixels is left out: the crop, threads, limits.
+        // What does not decide pixels is left out: the crop, threads, limits, which images
+        // the frame keeps besides colour.
         let pixels = RenderOptions {
             crop: None,
             threads: 0,
             max_pixels: 0,
             max_bounces: 0,
+            max_samples: 0,
+            max_filter_radius: 0,
+            depth_normal: false,
+            keep_samples: false,
             ..opts.clone()
         };
         let mut h = Fnv1a::new();
