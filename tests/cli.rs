@@ -424,3 +424,119 @@ fn every_course_command_line_parses() {
     }
     assert!(parsed >= 140, "only {parsed} course command lines parsed");
 }
+
+#[test]
+fn bad_sampling_options_are_one_line_errors() {
+    let s = scene();
+    let cases: &[(&str, &[&str], &str)] = &[
+        (
+            "nonsquare_uniform",
+            &["-uniform_samples", "5"],
+            "option -uniform_samples: uniform sampling needs a perfect square count (1, 4, 9, \
+             16, ...), found 5",
+        ),
+        (
+            "nonsquare_jittered",
+            &["--samples", "8"],
+            "option --samples: jittered sampling needs a perfect square count (1, 4, 9, 16, \
+             ...), found 8",
+        ),
+        (
+            "zero_count",
+            &["-random_samples", "0"],
+            "option -random_samples: expected a sample count of at least 1, found 0",
+        ),
+        (
+            "negative_count",
+            &["--samples", "-4"],
+            "option --samples: expected a sample count, found `-4`",
+        ),
+        (
+            "negative_radius",
+            &["-box_filter", "-1"],
+            "option -box_filter: expected a positive radius, found -1",
+        ),
+        (
+            "zero_radius",
+            &["--filter", "tent", "0"],
+            "option --filter: expected a positive radius, found 0",
+        ),
+        (
+            "nan_sigma",
+            &["-gaussian_filter", "NaN"],
+            "option -gaussian_filter: expected a filter sigma, found `NaN`",
+        ),
+        (
+            "zero_sigma",
+            &["--filter", "gaussian", "0"],
+            "option --filter: expected a positive sigma, found 0",
+        ),
+        (
+            "unknown_filter",
+            &["--filter", "sinc", "1"],
+            "option --filter: expected `box`, `tent` or `gaussian`, found `sinc`",
+        ),
+        (
+            "unknown_sampler",
+            &["--samples", "4", "--sampler", "stratified"],
+            "option --sampler: expected `uniform`, `random` or `jittered`, found `stratified`",
+        ),
+        (
+            "zoom_zero",
+            &["-render_samples", "s.tga", "0"],
+            "option -render_samples: expected a zoom factor of at least 1, found 0",
+        ),
+        (
+            "filter_zoom_zero",
+            &["--render-filter", "f.png", "0"],
+            "option --render-filter: expected a zoom factor of at least 1, found 0",
+        ),
+        (
+            "two_samplers",
+            &["-uniform_samples", "4", "-jittered_samples", "4"],
+            "options -uniform_samples and -jittered_samples: expected one sampler, found two",
+        ),
+        (
+            "course_and_modern_samplers",
+            &["--samples", "4", "-random_samples", "4"],
+            "options -random_samples and --samples: expected one sampler, found two",
+        ),
+        (
+            "two_filters",
+            &["-box_filter", "1", "-tent_filter", "1"],
+            "options -box_filter and -tent_filter: expected one filter, found two",
+        ),
+        (
+            "course_and_modern_filters",
+            &["--filter", "box", "1", "-gaussian_filter", "1"],
+            "options --filter and -gaussian_filter: expected one filter, found two",
+        ),
+        (
+            "sampler_alone",
+            &["--sampler", "random"],
+            "option --sampler needs --samples N to say how many samples",
+        ),
+    ];
+    for (name, extra, message) in cases {
+        let mut args = vec!["render", s.as_str(), "-o", "out.png", "--size", "8", "8"];
+        args.extend_from_slice(extra);
+        assert_usage_error(&format!("sampling_{name}"), &args, message);
+    }
+    // The course style words the same refusals alike.
+    assert_usage_error(
+        "sampling_course_style",
+        &[
+            "-input",
+            &s,
+            "-size",
+            "9",
+            "9",
+            "-output",
+            "o.tga",
+            "-jittered_samples",
+            "6",
+        ],
+        "option -jittered_samples: jittered sampling needs a perfect square count (1, 4, 9, 16, \
+         ...), found 6",
+    );
+}

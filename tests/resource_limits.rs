@@ -2,8 +2,8 @@
 //! the option that lifts it; lifting it works; and a scene or image that cannot fit in memory
 //! fails cleanly (exit 2, one line) instead of aborting.
 //!
-//! What belongs here: image size, bounce count, thread count and memory limits, through the
-//! real binary. Malformed files belong in `bad_input.rs`.
+//! What belongs here: image size, bounce count, thread count, sample count, filter radius,
+//! picture zoom and memory limits, through the real binary. Malformed files belong in `bad_input.rs`.
 
 mod common;
 
@@ -77,7 +77,7 @@ fn an_image_too_large_for_memory_is_an_error_not_an_abort() {
         ],
     );
     run.assert_error(
-        "image size 4000000000x4000000000 needs 473022463989257 MiB, more memory than",
+        "image size 4000000000x4000000000 needs 228881838989257 MiB, more memory than",
     );
     if overcommit_always() {
         eprintln!("skipped the 100000x100000 case: vm.overcommit_memory = 1 grants any request");
@@ -96,7 +96,7 @@ fn an_image_too_large_for_memory_is_an_error_not_an_abort() {
                 "10000000000",
             ],
         );
-        run.assert_error("image size 100000x100000 needs 295715 MiB, more memory than");
+        run.assert_error("image size 100000x100000 needs 143127 MiB, more memory than");
     }
     assert!(listing(&dir).is_empty());
 }
@@ -239,4 +239,47 @@ fn rays_that_multiply_every_bounce_are_refused_before_they_fill_memory() {
     let msg = run.assert_error("the packet tracer would queue");
     assert!(msg.contains("lower --bounces, raise --weight, or render with --tracer reference"));
     assert_eq!(listing(&dir), ["nest.txt"]);
+}
+
+#[test]
+fn absurd_sample_counts_filter_radii_and_zooms_are_refused_naming_the_limit_and_the_option() {
+    let dir = scratch_dir("limits/sampling");
+    let base = ["render", "absent.txt", "-o", "out.png"];
+    let refused = |extra: &[&str], message: &str| {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        assert_eq!(whitted(&dir, &args).assert_error(""), message, "{extra:?}");
+    };
+    refused(
+        &["--samples", "4096"],
+        "sample count 4096 is over the limit of 1024 per pixel (raise it with --max-samples N)",
+    );
+    refused(
+        &["--samples", "100", "--max-samples", "64"],
+        "sample count 100 is over the limit of 64 per pixel (raise it with --max-samples N)",
+    );
+    refused(
+        &["--filter", "gaussian", "100"],
+        "gaussian filter sigma 100 reaches 200 pixels, over the limit of 32 (raise it with \
+         --max-filter-radius N)",
+    );
+    let mut huge = base.to_vec();
+    huge.extend(["-box_filter", "1e30"]);
+    let msg = whitted(&dir, &huge).assert_error("box filter radius 1");
+    assert!(
+        msg.ends_with("(raise it with --max-filter-radius N)"),
+        "{msg}"
+    );
+    refused(
+        &["--size", "512", "512", "--render-samples", "s.png", "20"],
+        "option --render-samples: a 512x512 image zoomed 20 times is 10240x10240 pixels, over \
+         the limit of 67108864 (raise it with --max-pixels N)",
+    );
+    assert!(listing(&dir).is_empty());
+    // Lifting the limits works (the scene is missing, so the error is the next check's).
+    let mut args = base.to_vec();
+    args.extend(["--samples", "2025", "--max-samples", "2048"]);
+    args.extend(["--filter", "tent", "40", "--max-filter-radius", "40"]);
+    whitted(&dir, &args).assert_error("absent.txt: cannot read scene");
+    assert!(listing(&dir).is_empty());
 }
