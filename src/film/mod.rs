@@ -71,15 +71,27 @@ impl FilmSpec {
         }
     }
 
-    /// The pixels whose samples the window's pixels need: the window grown by the filter's
-    /// support radius, cropped at the image border.
+    /// The pixels whose samples the film traces: the window grown by the filter's support
+    /// radius, cropped at the image border, and its rows rounded out to whole bands of
+    /// [`BAND_ROWS`] rows of the image. A band is then traced exactly as the whole image's render
+    /// traces it (the packet tracer's packets depend on the band's pixels), so a window of whole
+    /// rows, such as a `--tile` strip, gets the whole render's bytes, its halo included.
     pub fn region(&self) -> Window {
-        grown(
+        let grown = grown(
             self.window,
             self.filter.support_radius(),
             self.image_width,
             self.image_height,
-        )
+        );
+        Window {
+            y0: grown.y0 / BAND_ROWS * BAND_ROWS,
+            y1: grown
+                .y1
+                .div_ceil(BAND_ROWS)
+                .saturating_mul(BAND_ROWS)
+                .min(self.image_height),
+            ..grown
+        }
     }
 }
 
