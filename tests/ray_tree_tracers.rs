@@ -117,8 +117,13 @@ fn with_several_samples_both_tracers_follow_the_sample_nearest_the_centre() {
         let eye = &packet.segments[0];
         let dir = (eye.end - eye.origin).normalize();
         assert!((dir - ray.dir).length() < 1e-5, "pixel ({x}, {y})");
-        let centre = scene.camera.generate_ray(Camera::pixel_point(x, y, 120, 90));
-        assert!((dir - centre.dir).length() > 1e-6, "pixel ({x}, {y}) is the centre");
+        let centre = scene
+            .camera
+            .generate_ray(Camera::pixel_point(x, y, 120, 90));
+        assert!(
+            (dir - centre.dir).length() > 1e-6,
+            "pixel ({x}, {y}) is the centre"
+        );
         // Its colour is that sample's in the render.
         let s = nearest_index(&sampler, x, y);
         let rendered = frame.samples[((y * 120 + x) * 9 + s) as usize];
