@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use super::sampling_options::{self as sampling, Sampling};
+use super::sampling_options::{Entries, Sampled, Sampling};
 use super::table::{Opt, Table, Values};
 use crate::error::Result;
 use crate::math::Vec3;
@@ -71,6 +71,16 @@ impl Command {
             tile: None,
             sampling: Sampling::default(),
         }
+    }
+}
+
+impl Sampled for Command {
+    fn sampling(&mut self) -> &mut Sampling {
+        &mut self.sampling
+    }
+
+    fn render(&mut self) -> &mut RenderOptions {
+        &mut self.render
     }
 }
 
@@ -404,20 +414,20 @@ pub static OPTIONS: Table<Command> = Table {
                 Ok(())
             },
         },
-        sampling::SAMPLES,
-        sampling::SAMPLER,
-        sampling::UNIFORM_SAMPLES,
-        sampling::JITTERED_SAMPLES,
-        sampling::RANDOM_SAMPLES,
-        sampling::SEED,
-        sampling::FILTER,
-        sampling::BOX_FILTER,
-        sampling::TENT_FILTER,
-        sampling::GAUSSIAN_FILTER,
-        sampling::RENDER_SAMPLES,
-        sampling::RENDER_FILTER,
-        sampling::MAX_SAMPLES,
-        sampling::MAX_FILTER_RADIUS,
+        Entries::<Command>::SAMPLES,
+        Entries::<Command>::SAMPLER,
+        Entries::<Command>::UNIFORM_SAMPLES,
+        Entries::<Command>::JITTERED_SAMPLES,
+        Entries::<Command>::RANDOM_SAMPLES,
+        Entries::<Command>::SEED,
+        Entries::<Command>::FILTER,
+        Entries::<Command>::BOX_FILTER,
+        Entries::<Command>::TENT_FILTER,
+        Entries::<Command>::GAUSSIAN_FILTER,
+        Entries::<Command>::RENDER_SAMPLES,
+        Entries::<Command>::RENDER_FILTER,
+        Entries::<Command>::MAX_SAMPLES,
+        Entries::<Command>::MAX_FILTER_RADIUS,
         Opt {
             long: "--ray-tree",
             course: "",
