@@ -1,13 +1,15 @@
 //! Claim: a cropped render (`RenderOptions::crop`, `--crop`, `--tile`) is exactly the window of
 //! the whole render: the same colour, depth and normal bits for every pixel, with both tracers,
 //! for windows of any shape and place (odd offsets, single pixels, whole bands, the image's last
-//! columns and rows) and for every `--tile I/N` strip; and the strips of a tiling cover the
-//! image once, top to bottom.
+//! columns and rows), anti-aliased too (a crop traces its filter's halo), and for every
+//! `--tile I/N` strip; and the strips of a tiling cover the image once, top to bottom.
 
 mod common;
 
 use common::our_scenes;
+use whitted::filter::{Filter, Shape};
 use whitted::options::{TILE_ROW_STEP, Window};
+use whitted::sampler::{Pattern, Sampler};
 use whitted::shade::ShadeOptions;
 use whitted::{Frame, RenderOptions, Scene, Tracer, render};
 
@@ -31,6 +33,24 @@ fn bits(frame: &Frame) -> (Vec<[u32; 3]>, Vec<u32>, Vec<[u32; 3]>) {
 
 #[test]
 fn a_crop_is_the_window_of_the_whole_render_with_both_tracers() {
+    crops_are_windows_of_the_whole_render(Sampler::default(), Filter::default());
+}
+
+#[test]
+fn an_anti_aliased_crop_is_the_window_of_the_whole_render_with_both_tracers() {
+    let sampler = Sampler {
+        pattern: Pattern::Jittered,
+        count: 4,
+        seed: 3,
+    };
+    let filter = Filter {
+        shape: Shape::Gaussian,
+        size: 1.0,
+    };
+    crops_are_windows_of_the_whole_render(sampler, filter);
+}
+
+fn crops_are_windows_of_the_whole_render(sampler: Sampler, filter: Filter) {
     let (w, h) = (75, 61);
     let windows = [
         Window {
@@ -77,6 +97,8 @@ fn a_crop_is_the_window_of_the_whole_render_with_both_tracers() {
                 width: w,
                 height: h,
                 tracer,
+                sampler,
+                filter,
                 shade: ShadeOptions {
                     shadows: true,
                     shade_back: true,

@@ -1,6 +1,8 @@
 //! Claim: a render cut into tiles by `whitted tiles`, run by GNU parallel and put back together
 //! by its merge line has the bytes of the render made in one go: the showcase at 1024x768 in 16
-//! tiles, colour, depth and normals, as PNG and as EXR. `.ci/run` installs GNU parallel.
+//! tiles, colour, depth and normals, as PNG and as EXR; and anti-aliased, with a filter whose
+//! support crosses the tiles' borders (each tile traces its filter halo). `.ci/run` installs GNU
+//! parallel.
 
 mod common;
 
@@ -38,18 +40,31 @@ fn have_parallel() -> bool {
 
 #[test]
 fn sixteen_tiles_run_by_gnu_parallel_merge_to_the_bytes_of_the_one_go_render() {
+    let opts = "--size 1024 768 --shadows --shade-back --transparent-shadows --bounces 8";
+    tiles_merge_to_the_one_go_render("tiles_parallel", opts, &["png", "exr"]);
+}
+
+#[test]
+fn anti_aliased_tiles_merge_to_the_bytes_of_the_one_go_render() {
+    // A Gaussian of sigma 1.0 reads the samples of the pixels 2 rows into the next tile.
+    let opts = "--size 1024 768 --shadows --shade-back --bounces 3 --samples 4 --filter gaussian 1";
+    tiles_merge_to_the_one_go_render("tiles_parallel_aa", opts, &["png"]);
+}
+
+/// Renders the showcase with `opts` in 16 tiles run by GNU parallel, merges them and checks
+/// the bytes against the one-go render, for colour, depth and normals in each format of `exts`.
+fn tiles_merge_to_the_one_go_render(name: &str, opts: &str, exts: &[&str]) {
     assert!(
         have_parallel(),
         "GNU parallel is not installed: `apt-get install parallel` (.ci/run installs it)"
     );
-    let dir = scratch_dir("tiles_parallel");
+    let dir = scratch_dir(name);
     let scene = our_scenes()
         .into_iter()
         .find(|p| p.ends_with("showcase.txt"))
         .unwrap();
     let scene = scene.display();
-    let opts = "--size 1024 768 --shadows --shade-back --transparent-shadows --bounces 8";
-    for ext in ["png", "exr"] {
+    for ext in exts {
         let outputs = format!("-o c.{ext} --depth 5 20 d.{ext} --normals n.{ext}");
         let tiles = format!("\"$W\" tiles 16 {scene} {opts} {outputs}");
         let lines = sh(&dir, &tiles);
