@@ -165,24 +165,6 @@ impl SampleBlock {
         }
     }
 
-    /// A block of one pixel holding one sample at `offset` (the ray-tree pixel).
-    pub fn single(x: u32, y: u32, offset: Vec2, image_width: u32, image_height: u32) -> Self {
-        SampleBlock {
-            x0: x,
-            y0: y,
-            width: 1,
-            rows: 1,
-            image_width,
-            image_height,
-            spp: 1,
-            offsets: vec![offset],
-            nearest: vec![0],
-            color: vec![Vec3::ZERO],
-            depth: vec![f32::INFINITY],
-            normal: vec![Vec3::ZERO],
-        }
-    }
-
     /// The number of samples.
     pub fn len(&self) -> usize {
         self.offsets.len()
@@ -220,8 +202,7 @@ impl SampleBlock {
     /// depth and normal images (always false when they are not kept).
     #[inline]
     pub fn keeps_hit(&self, slot: usize) -> bool {
-        let p = slot / self.spp as usize;
-        !self.depth.is_empty() && self.nearest[p] as usize == slot % self.spp as usize
+        !self.depth.is_empty() && is_nearest(&self.nearest, self.spp, slot)
     }
 
     /// Records the hit of `slot`'s ray if it is the one the depth and normal images show.
@@ -254,6 +235,14 @@ impl FilmOutput {
             grid: None,
         }
     }
+}
+
+/// True if sample slot `slot` (`spp` slots a pixel) is its pixel's sample nearest the centre,
+/// `nearest` holding that sample's index for each pixel.
+#[inline]
+pub fn is_nearest(nearest: &[u32], spp: u32, slot: usize) -> bool {
+    let spp = spp as usize;
+    nearest[slot / spp] as usize == slot % spp
 }
 
 /// The samples the filter reads: per row of the sample region (row `y0` first), the colours

@@ -29,7 +29,7 @@ use bumpalo::Bump;
 
 use crate::error::{Error, Result};
 pub use crate::film::BAND_ROWS;
-use crate::film::{FilmSpec, SampleBlock, render_film};
+use crate::film::{FilmSpec, SampleBlock, is_nearest, render_film};
 use crate::frame::Frame;
 use crate::geometry::Geometry;
 use crate::math::{Vec2, Vec3, saturate};
@@ -80,9 +80,8 @@ impl BandOutput<'_> {
     /// Records the first hit of the camera ray of `slot` if its pixel's depth and normal show it.
     #[inline]
     pub fn record_hit(&mut self, slot: usize, t: f32, normal: Vec3) {
-        let spp = self.spp as usize;
-        let p = slot / spp;
-        if !self.depth.is_empty() && self.nearest[p] as usize == slot % spp {
+        if !self.depth.is_empty() && is_nearest(self.nearest, self.spp, slot) {
+            let p = slot / self.spp as usize;
             self.depth[p] = t;
             self.normal[p] = normal;
         }
