@@ -519,6 +519,7 @@ fn random_scenes_render_the_same_antialiased_with_both_tracers() {
         assert_equivalent(&color_image(&r), &color_image(&p), &what);
         rendered += 1;
     }
+    eprintln!("{rendered} anti-aliased random scenes");
     assert!(rendered >= 50, "only {rendered} random scenes parsed");
     assert_eq!(seen.len(), 9, "every sampler with every filter: {seen:?}");
 }
