@@ -5,7 +5,7 @@
 //! are built on these. `wide` emits AVX2 only when it is enabled at compile time, which
 //! `.cargo/config.toml` does (`target-cpu=x86-64-v3`).
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use crate::math::Vec3;
 
@@ -18,6 +18,97 @@ pub type F32x8 = wide::f32x8;
 pub type I32x8 = wide::i32x8;
 /// A lane mask: all bits set in a lane means true, all clear means false.
 pub type Mask = wide::f32x8;
+/// Four `f32` lanes: the width of the BVH's leaf blocks (a single ray against 4 primitives).
+pub type F32x4 = wide::f32x4;
+/// Four `i32` lanes.
+pub type I32x4 = wide::i32x4;
+
+/// What the kernels written once for every lane width need of a SIMD float type: arithmetic,
+/// comparisons returning masks of the same type (as `wide` does), blending and a bitmask.
+/// Implemented for [`F32x8`] (packets: 8 rays against one primitive) and [`F32x4`] (leaf
+/// blocks: one ray against 4 primitives); the same expression on either gives the same bits in
+/// every lane, which is what keeps the packet and single-ray paths identical.
+pub trait Simd:
+    Copy
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + BitAnd<Output = Self>
+    + BitOr<Output = Self>
+    + Not<Output = Self>
+{
+    /// Every lane `v`.
+    fn splat(v: f32) -> Self;
+    /// Lane-wise `<`.
+    fn lt(self, o: Self) -> Self;
+    /// Lane-wise `<=`.
+    fn le(self, o: Self) -> Self;
+    /// Lane-wise `>`.
+    fn gt(self, o: Self) -> Self;
+    /// Lane-wise `>=`.
+    fn ge(self, o: Self) -> Self;
+    /// Lane-wise `==`.
+    fn eq(self, o: Self) -> Self;
+    /// Lanes of `a` where `mask` is set, else of `b`.
+    fn pick(mask: Self, a: Self, b: Self) -> Self;
+    /// Lane-wise absolute value.
+    fn abs_lanes(self) -> Self;
+    /// Lane-wise square root.
+    fn sqrt_lanes(self) -> Self;
+    /// Bit `i` set when lane `i` of the mask is.
+    fn bits(self) -> u32;
+}
+
+macro_rules! impl_simd {
+    ($t:ty) => {
+        impl Simd for $t {
+            #[inline(always)]
+            fn splat(v: f32) -> Self {
+                <$t>::splat(v)
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> Self {
+                self.simd_lt(o)
+            }
+            #[inline(always)]
+            fn le(self, o: Self) -> Self {
+                self.simd_le(o)
+            }
+            #[inline(always)]
+            fn gt(self, o: Self) -> Self {
+                self.simd_gt(o)
+            }
+            #[inline(always)]
+            fn ge(self, o: Self) -> Self {
+                self.simd_ge(o)
+            }
+            #[inline(always)]
+            fn eq(self, o: Self) -> Self {
+                self.simd_eq(o)
+            }
+            #[inline(always)]
+            fn pick(mask: Self, a: Self, b: Self) -> Self {
+                mask.select(a, b)
+            }
+            #[inline(always)]
+            fn abs_lanes(self) -> Self {
+                self.abs()
+            }
+            #[inline(always)]
+            fn sqrt_lanes(self) -> Self {
+                self.sqrt()
+            }
+            #[inline(always)]
+            fn bits(self) -> u32 {
+                self.to_bitmask()
+            }
+        }
+    };
+}
+impl_simd!(F32x8);
+impl_simd!(F32x4);
 
 /// A mask with every lane false.
 #[inline(always)]
@@ -38,6 +129,15 @@ pub fn mask_from_bits(bits: u32) -> Mask {
     F32x8::new(std::array::from_fn(|i| {
         if bits >> i & 1 == 1 { on } else { 0.0 }
     }))
+}
+
+/// The mask whose lane `i` is bit `i` of `bits` (the low 8 bits), without branches: for masks
+/// kept as bits in hot loops.
+#[inline(always)]
+pub fn mask_from_byte(bits: u32) -> Mask {
+    let lane_bit = I32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+    let set = (I32x8::splat(bits as i32) & lane_bit).simd_eq(lane_bit);
+    bytemuck::cast(set)
 }
 
 /// Lane-wise `a < b`.
@@ -155,31 +255,78 @@ pub fn lanes_i32(a: I32x8) -> [i32; LANES] {
     a.to_array()
 }
 
-/// Eight 3-vectors stored as three `F32x8` (structure of arrays).
+/// 3-vectors stored as one SIMD value per coordinate (structure of arrays): lane `i` of `x`,
+/// `y`, `z` is vector `i`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Vec3x8 {
-    pub x: F32x8,
-    pub y: F32x8,
-    pub z: F32x8,
+pub struct Vec3v<T> {
+    pub x: T,
+    pub y: T,
+    pub z: T,
 }
 
-impl Vec3x8 {
-    /// All lanes zero.
-    #[inline(always)]
-    pub fn zero() -> Vec3x8 {
-        Vec3x8::splat(Vec3::ZERO)
-    }
+/// Eight 3-vectors (a packet's origins or directions).
+pub type Vec3x8 = Vec3v<F32x8>;
+/// Four 3-vectors (a leaf block's vertices).
+pub type Vec3x4 = Vec3v<F32x4>;
 
+impl<T: Simd> Vec3v<T> {
     /// The same vector in every lane.
     #[inline(always)]
-    pub fn splat(v: Vec3) -> Vec3x8 {
-        Vec3x8 {
-            x: F32x8::splat(v.x),
-            y: F32x8::splat(v.y),
-            z: F32x8::splat(v.z),
+    pub fn splat(v: Vec3) -> Vec3v<T> {
+        Vec3v {
+            x: T::splat(v.x),
+            y: T::splat(v.y),
+            z: T::splat(v.z),
         }
     }
 
+    /// All lanes zero.
+    #[inline(always)]
+    pub fn zero() -> Vec3v<T> {
+        Vec3v::splat(Vec3::ZERO)
+    }
+
+    /// Lane-wise dot product.
+    #[inline(always)]
+    pub fn dot(self, o: Vec3v<T>) -> T {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// Lane-wise cross product (glam's order of operations, so lanes match `Vec3::cross`).
+    #[inline(always)]
+    pub fn cross(self, o: Vec3v<T>) -> Vec3v<T> {
+        Vec3v {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+
+    /// Lane-wise squared length.
+    #[inline(always)]
+    pub fn length_squared(self) -> T {
+        self.dot(self)
+    }
+
+    /// Lane-wise unit vector (as `glam::Vec3::normalize`: divides by the length).
+    #[inline(always)]
+    pub fn normalize(self) -> Vec3v<T> {
+        let inv = T::splat(1.0) / self.dot(self).sqrt_lanes();
+        self * inv
+    }
+
+    /// Lanes of `a` where `mask` is set, else of `b`.
+    #[inline(always)]
+    pub fn select(mask: T, a: Vec3v<T>, b: Vec3v<T>) -> Vec3v<T> {
+        Vec3v {
+            x: T::pick(mask, a.x, b.x),
+            y: T::pick(mask, a.y, b.y),
+            z: T::pick(mask, a.z, b.z),
+        }
+    }
+}
+
+impl Vec3x8 {
     /// Lane `i` is `v[i]`.
     #[inline]
     pub fn from_lanes(v: [Vec3; LANES]) -> Vec3x8 {
@@ -207,52 +354,25 @@ impl Vec3x8 {
         self.y.as_mut_array()[i] = v.y;
         self.z.as_mut_array()[i] = v.z;
     }
+}
 
-    /// Lane-wise dot product.
+impl Vec3x4 {
+    /// The vectors of four `[x; 4], [y; 4], [z; 4]` columns.
     #[inline(always)]
-    pub fn dot(self, o: Vec3x8) -> F32x8 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    /// Lane-wise cross product.
-    #[inline(always)]
-    pub fn cross(self, o: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
-            x: self.y * o.z - o.y * self.z,
-            y: self.z * o.x - o.z * self.x,
-            z: self.x * o.y - o.x * self.y,
-        }
-    }
-
-    /// Lane-wise squared length.
-    #[inline(always)]
-    pub fn length_squared(self) -> F32x8 {
-        self.dot(self)
-    }
-
-    /// Lane-wise unit vector (as `glam::Vec3::normalize`: divides by the length).
-    #[inline(always)]
-    pub fn normalize(self) -> Vec3x8 {
-        let inv = F32x8::splat(1.0) / sqrt(self.dot(self));
-        self * inv
-    }
-
-    /// Lanes of `a` where `mask` is set, else of `b`.
-    #[inline(always)]
-    pub fn select(mask: Mask, a: Vec3x8, b: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
-            x: select(mask, a.x, b.x),
-            y: select(mask, a.y, b.y),
-            z: select(mask, a.z, b.z),
+    pub fn from_columns(c: &[[f32; 4]; 3]) -> Vec3x4 {
+        Vec3x4 {
+            x: F32x4::new(c[0]),
+            y: F32x4::new(c[1]),
+            z: F32x4::new(c[2]),
         }
     }
 }
 
-impl Add for Vec3x8 {
-    type Output = Vec3x8;
+impl<T: Simd> Add for Vec3v<T> {
+    type Output = Vec3v<T>;
     #[inline(always)]
-    fn add(self, o: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
+    fn add(self, o: Vec3v<T>) -> Vec3v<T> {
+        Vec3v {
             x: self.x + o.x,
             y: self.y + o.y,
             z: self.z + o.z,
@@ -260,11 +380,11 @@ impl Add for Vec3x8 {
     }
 }
 
-impl Sub for Vec3x8 {
-    type Output = Vec3x8;
+impl<T: Simd> Sub for Vec3v<T> {
+    type Output = Vec3v<T>;
     #[inline(always)]
-    fn sub(self, o: Vec3x8) -> Vec3x8 {
-        Vec3x8 {
+    fn sub(self, o: Vec3v<T>) -> Vec3v<T> {
+        Vec3v {
             x: self.x - o.x,
             y: self.y - o.y,
             z: self.z - o.z,
@@ -272,11 +392,11 @@ impl Sub for Vec3x8 {
     }
 }
 
-impl Mul<F32x8> for Vec3x8 {
-    type Output = Vec3x8;
+impl<T: Simd> Mul<T> for Vec3v<T> {
+    type Output = Vec3v<T>;
     #[inline(always)]
-    fn mul(self, s: F32x8) -> Vec3x8 {
-        Vec3x8 {
+    fn mul(self, s: T) -> Vec3v<T> {
+        Vec3v {
             x: self.x * s,
             y: self.y * s,
             z: self.z * s,
@@ -284,11 +404,11 @@ impl Mul<F32x8> for Vec3x8 {
     }
 }
 
-impl Neg for Vec3x8 {
-    type Output = Vec3x8;
+impl<T: Simd> Neg for Vec3v<T> {
+    type Output = Vec3v<T>;
     #[inline(always)]
-    fn neg(self) -> Vec3x8 {
-        Vec3x8 {
+    fn neg(self) -> Vec3v<T> {
+        Vec3v {
             x: -self.x,
             y: -self.y,
             z: -self.z,
@@ -333,6 +453,13 @@ mod tests {
         assert_eq!(bitmask(mask_first(8)), 0xff);
         assert_eq!(bitmask(mask_first(0)), 0);
         assert_eq!(bitmask(mask_from_bits(0b1010_0101)), 0b1010_0101);
+        for bits in 0..256 {
+            assert_eq!(bitmask(mask_from_byte(bits)), bits);
+            assert_eq!(
+                mask_from_byte(bits).to_array().map(f32::to_bits),
+                mask_from_bits(bits).to_array().map(f32::to_bits)
+            );
+        }
         assert!(all(mask_first(8)) && !any(mask_none()));
         let m = mask_from_bits(0b0000_0110);
         let s = select_i32(m, I32x8::splat(7), I32x8::splat(-1));

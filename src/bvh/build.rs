@@ -1,27 +1,74 @@
-//! The binned SAH builder: primitive bounds in, a depth-first node array and the primitive
-//! order out. Each node is split at the best of [`BINS`] bin boundaries on each axis by the
-//! surface area heuristic, or made a leaf when that is cheaper (at most [`MAX_LEAF`]
-//! primitives). Every primitive carries a tag (its kind, opaque here): a leaf never mixes tags,
-//! so its primitives are one contiguous range of one SoA array once they are reordered.
+//! The binned SAH builder, 8-wide and parallel: primitive bounds and tags in, a [`Bvh8`] out,
+//! each leaf stored by the caller's [`LeafSink`] as it is made (the one pass that reorders the
+//! primitives into leaf blocks). Embree's recipe (`BVHBuilderBinnedSAH`):
 //!
-//! Speed: the builder works on an array of 32-byte primitive references (bounds, id, tag) that
-//! it partitions in place, so every pass reads memory in order; one pass bins all three axes,
-//! children get their bounds from the bins and their centroid bounds from the partition pass,
-//! so no node ever re-scans its primitives for bounds (see PERF.md, "BVH build").
+//! - the builder works on 32-byte primitive references (bounds, index, tag) that it partitions
+//!   in place, every pass reading memory in order;
+//! - one pass bins the centroids on all three axes at once (SSE), with as many bins as the node
+//!   deserves (`4 + n / 20`, at most [`MAX_BINS`]); the children's bounds come from the bins
+//!   and their centroid bounds and tags from the partition pass, so nothing is scanned twice;
+//! - the SAH prices a leaf in blocks of the leaf width ([`BuildSettings::block`]), as the
+//!   leaves are stored;
+//! - a node opens up to 8 children by splitting, again and again, the child with the largest
+//!   area (children sorted by area, largest first);
+//! - nodes come from one pre-sized [`Arena`]; big nodes bin and partition in parallel chunks,
+//!   and subtrees over many primitives are built in parallel (rayon), so no phase is serial.
+//!
+//! Every primitive carries a tag (its kind, opaque here): a leaf never mixes tags. The tree
+//! does not depend on the thread count: binning and partitioning are by value, and leaves list
+//! their primitives sorted.
 
 use glam::Vec4;
+use rayon::prelude::*;
 
-use super::{Aabb, Bvh, BvhNode, MAX_DEPTH};
+use super::arena::Arena;
+use super::{Aabb, Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, WIDTH, padded};
 use crate::simd::trunc3;
 
-/// The most primitives a leaf holds.
-pub const MAX_LEAF: usize = 4;
-/// Bins per axis for big nodes (a power of two).
-pub const BINS: usize = 16;
-/// Cost of visiting a node relative to intersecting one primitive.
-const TRAVERSAL_COST: f32 = 1.0;
+/// The most bins per axis.
+pub const MAX_BINS: usize = 32;
 
-/// A primitive reference: bounds with the id in `min.w` and the tag in `max.w` (as bits).
+/// Subtrees over more primitives than this are built in parallel.
+const PARALLEL_SUBTREE: usize = 4096;
+
+/// Nodes over more primitives than this bin and partition in parallel chunks of this size.
+const PARALLEL_PASS: usize = 1 << 16;
+
+/// Where the builder puts leaves: the caller turns a group of primitives into its leaf storage.
+pub trait LeafSink: Sync {
+    /// Stores the primitives `prims` (all tagged `tag`, sorted ascending) as one leaf and
+    /// returns the leaf's first index ([`Leaf::first`]; its `count` is `prims.len()`).
+    fn leaf(&self, tag: u8, prims: &[u32]) -> u32;
+}
+
+/// The builder's knobs (see PERF.md for how they were chosen).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildSettings {
+    /// The leaf width: the SAH prices a leaf of `n` primitives as `ceil(n / block)` blocks.
+    pub block: usize,
+    /// Primitives at or below this count (of one tag) always make a leaf.
+    pub min_leaf: usize,
+    /// The most primitives a leaf holds, unless no split separates them.
+    pub max_leaf: usize,
+    /// Cost of visiting a node relative to intersecting one block.
+    pub traversal_cost: f32,
+    /// Bins per axis for big nodes (at most [`MAX_BINS`]).
+    pub max_bins: usize,
+}
+
+impl Default for BuildSettings {
+    fn default() -> BuildSettings {
+        BuildSettings {
+            block: 4,
+            min_leaf: 4,
+            max_leaf: 8,
+            traversal_cost: 1.0,
+            max_bins: MAX_BINS,
+        }
+    }
+}
+
+/// A primitive reference: bounds with the index in `min.w` and the tag in `max.w` (as bits).
 #[derive(Clone, Copy)]
 struct PrimRef {
     min: Vec4,
@@ -87,262 +134,485 @@ impl Box4 {
     }
 }
 
-/// Builds a BVH over primitives with the given bounds and tags. Returns the tree and the
-/// primitive order: leaf ranges index into it.
-pub fn build(bounds: &[Aabb], tags: &[u8]) -> (Bvh, Vec<u32>) {
-    let n = bounds.len();
-    let mut all = Box4::EMPTY;
-    let mut centroids = Box4::EMPTY;
-    let mut refs: Vec<PrimRef> = bounds
-        .iter()
-        .zip(tags)
-        .enumerate()
-        .map(|(i, (b, &tag))| {
-            let r = PrimRef {
+/// What a node's builder knows of its primitives: bounds, centroid bounds (doubled), and the
+/// set of tags (bit `t` = tag `t` present).
+#[derive(Clone, Copy)]
+struct Record {
+    bounds: Box4,
+    centroids: Box4,
+    tags: u32,
+}
+
+impl Record {
+    const EMPTY: Record = Record {
+        bounds: Box4::EMPTY,
+        centroids: Box4::EMPTY,
+        tags: 0,
+    };
+
+    #[inline(always)]
+    fn add(&mut self, r: &PrimRef) {
+        self.bounds.grow(r.min, r.max);
+        let c = r.centroid2();
+        self.centroids.grow(c, c);
+        self.tags |= 1 << r.tag();
+    }
+
+    fn merge(mut self, o: &Record) -> Record {
+        self.bounds = self.bounds.union(&o.bounds);
+        self.centroids = self.centroids.union(&o.centroids);
+        self.tags |= o.tags;
+        self
+    }
+
+    fn of(refs: &[PrimRef]) -> Record {
+        if refs.len() > PARALLEL_PASS {
+            return refs
+                .par_chunks(PARALLEL_PASS)
+                .map(Record::of)
+                .reduce(|| Record::EMPTY, |a, b| a.merge(&b));
+        }
+        let mut r = Record::EMPTY;
+        for p in refs {
+            r.add(p);
+        }
+        r
+    }
+}
+
+/// Builds a BVH over `n` primitives, primitive `i` having bounds and tag `prim(i)` (tags below
+/// 32); `sink` stores the leaves.
+pub fn build(
+    n: usize,
+    prim: impl Fn(usize) -> (Aabb, u8) + Sync,
+    settings: &BuildSettings,
+    sink: &impl LeafSink,
+) -> Bvh8 {
+    assert!(n < u32::MAX as usize, "too many primitives for one BVH");
+    if n == 0 {
+        return Bvh8::default();
+    }
+    let mut refs: Vec<PrimRef> = (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let (b, tag) = prim(i);
+            assert!(tag < 32, "primitive tags are below 32");
+            PrimRef {
                 min: b.min.extend(f32::from_bits(i as u32)),
                 max: b.max.extend(f32::from_bits(tag as u32)),
-            };
-            all.grow(r.min, r.max);
-            let c = r.centroid2();
-            centroids.grow(c, c);
-            r
+            }
         })
         .collect();
-    let mut b = Builder {
-        nodes: Vec::with_capacity(n.max(1)),
-        bins: Bins::new(),
+    let rec = Record::of(&refs);
+    // A tree over n primitives has fewer than n interior nodes (each has two children or more).
+    let builder = Builder {
+        settings: BuildSettings {
+            max_bins: settings.max_bins.clamp(2, MAX_BINS),
+            block: settings.block.max(1),
+            ..*settings
+        },
+        nodes: Arena::with_capacity(n),
+        sink,
     };
-    if n > 0 {
-        b.node(&mut refs, 0, all, centroids, 0, true);
+    let root = builder.subtree(&mut refs, rec, 1, &mut Bins::new());
+    Bvh8 {
+        nodes: builder.nodes.into_vec(),
+        root,
+        bounds: padded(&rec.bounds.aabb()),
     }
-    let order = refs.iter().map(PrimRef::id).collect();
-    (Bvh { nodes: b.nodes }, order)
 }
 
-struct Builder {
-    nodes: Vec<BvhNode>,
-    bins: Bins,
+struct Builder<'s, S: LeafSink> {
+    settings: BuildSettings,
+    nodes: Arena<Node8>,
+    sink: &'s S,
 }
 
-/// The chosen split: axis, bin boundary, the two children's bounds, the left count and the
-/// SAH cost of the children (area-weighted counts).
+/// A split: the axis and bin boundary (everything in a lower bin goes left), the children's
+/// bounds and the left count, and the SAH cost of the children (area times blocks).
+#[derive(Clone, Copy)]
 struct Split {
     axis: usize,
     boundary: usize,
-    left: Box4,
-    right: Box4,
-    left_count: usize,
+    mapping: Mapping,
     cost: f32,
 }
 
-impl Builder {
-    /// Builds the node over `refs` (which start at position `first` of the whole array);
-    /// `bounds` and `centroids` are theirs. Returns the node's index.
-    fn node(
-        &mut self,
-        refs: &mut [PrimRef],
-        first: usize,
-        bounds: Box4,
-        centroids: Box4,
-        depth: usize,
-        parent_mixed: bool,
-    ) -> u32 {
-        let index = self.nodes.len() as u32;
-        let count = refs.len();
-        self.nodes
-            .push(BvhNode::leaf(&bounds.aabb(), first as u32, count as u32));
-        // Only a node whose parent mixed tags can itself mix them.
-        let mixed = parent_mixed && refs.iter().any(|r| r.tag() != refs[0].tag());
-        if count <= 1 && !mixed {
-            return index;
+/// How centroids map to bins: `nb` bins spanning the centroid bounds on each axis.
+#[derive(Clone, Copy)]
+struct Mapping {
+    nb: usize,
+    lo: Vec4,
+    scale: Vec4,
+}
+
+impl Mapping {
+    fn new(centroids: &Box4, n: usize, max_bins: usize) -> Mapping {
+        let nb = (4 + n / 20).min(max_bins);
+        let extent = centroids.max - centroids.min;
+        let s = Vec4::splat(nb as f32 * (1.0 - 1e-6)) / extent;
+        Mapping {
+            nb,
+            lo: centroids.min,
+            scale: Vec4::select(extent.cmpgt(Vec4::ZERO), s, Vec4::ZERO),
         }
-        let leaf_ok = count <= MAX_LEAF && !mixed;
-        let split = if depth >= MAX_DEPTH - 1 {
-            None
-        } else {
-            best_split(refs, &centroids, &mut self.bins)
-        };
-        let (mid, left, right) = match split {
-            Some(s) => {
-                let area = bounds.half_area().max(f32::MIN_POSITIVE);
-                if leaf_ok && count as f32 <= TRAVERSAL_COST + s.cost / area {
-                    return index;
-                }
-                let (mid, cl, cr) = partition_by_bin(refs, &s, &centroids);
-                debug_assert_eq!(mid, s.left_count);
-                (mid, (s.left, cl), (s.right, cr))
-            }
-            None if leaf_ok => return index,
-            // No spatial split (every centroid coincides, or too deep): separate the kinds, or
-            // halve the range.
-            None => {
-                let mid = if mixed {
-                    partition_by_tag(refs)
-                } else if depth >= MAX_DEPTH - 1 {
-                    return index;
-                } else {
-                    count / 2
-                };
-                let (l, r) = refs.split_at(mid);
-                (mid, bounds_of(l), bounds_of(r))
-            }
-        };
-        let (left_refs, right_refs) = refs.split_at_mut(mid);
-        let l = self.node(left_refs, first, left.0, left.1, depth + 1, mixed);
-        debug_assert_eq!(l, index + 1);
-        let r = self.node(right_refs, first + mid, right.0, right.1, depth + 1, mixed);
-        self.nodes[index as usize] = BvhNode::interior(&bounds.aabb(), r);
-        index
+    }
+
+    /// The bin of a (doubled) centroid on each axis.
+    #[inline(always)]
+    fn bins(&self, c: Vec4) -> [usize; 3] {
+        let b = ((c - self.lo) * self.scale).clamp(Vec4::ZERO, Vec4::splat((self.nb - 1) as f32));
+        trunc3(b)
     }
 }
 
-/// Bounds and centroid bounds of some references.
-fn bounds_of(refs: &[PrimRef]) -> (Box4, Box4) {
-    let mut b = Box4::EMPTY;
-    let mut c = Box4::EMPTY;
-    for r in refs {
-        b.grow(r.min, r.max);
-        let cc = r.centroid2();
-        c.grow(cc, cc);
-    }
-    (b, c)
-}
-
-/// Bins for a node of `count` primitives: [`BINS`] for big nodes, fewer for small ones, whose
-/// cost would otherwise be setting up and sweeping empty bins (see PERF.md, "BVH build").
-#[inline(always)]
-fn bins_for(count: usize) -> usize {
-    count.next_power_of_two().clamp(2, BINS)
-}
-
-/// Per-axis bin scale: `nb` bins span the centroid bounds (zero-extent axes get scale 0).
-#[inline(always)]
-fn bin_scale(centroids: &Box4, nb: usize) -> Vec4 {
-    let extent = centroids.max - centroids.min;
-    let s = Vec4::splat(nb as f32 * (1.0 - 1e-6)) / extent;
-    Vec4::select(extent.cmpgt(Vec4::ZERO), s, Vec4::ZERO)
-}
-
-/// The bin of a (doubled) centroid on each axis.
-#[inline(always)]
-fn bin_index(c: Vec4, lo: Vec4, scale: Vec4, nb: usize) -> [usize; 3] {
-    let b = ((c - lo) * scale).clamp(Vec4::ZERO, Vec4::splat((nb - 1) as f32));
-    trunc3(b)
-}
-
-/// Bin counts and bounds per axis, kept by the builder so no node pays for setting up more
-/// than the bins it uses.
+/// Bin counts and bounds per axis.
+#[derive(Clone)]
 struct Bins {
-    counts: [[u32; BINS]; 3],
-    boxes: [[Box4; BINS]; 3],
+    counts: [[u32; MAX_BINS]; 3],
+    boxes: [[Box4; MAX_BINS]; 3],
 }
 
 impl Bins {
     fn new() -> Bins {
         Bins {
-            counts: [[0; BINS]; 3],
-            boxes: [[Box4::EMPTY; BINS]; 3],
+            counts: [[0; MAX_BINS]; 3],
+            boxes: [[Box4::EMPTY; MAX_BINS]; 3],
+        }
+    }
+
+    fn clear(&mut self, nb: usize) {
+        for axis in 0..3 {
+            self.counts[axis][..nb].fill(0);
+            self.boxes[axis][..nb].fill(Box4::EMPTY);
+        }
+    }
+
+    /// Adds every reference on all three axes, two at a time (independent updates overlap).
+    #[inline(always)]
+    fn add_all(&mut self, refs: &[PrimRef], m: &Mapping) {
+        let mut add = |r: &PrimRef, b: [usize; 3]| {
+            for (axis, b) in b.into_iter().enumerate() {
+                // (the mask only tells the compiler the index is in range)
+                let b = b & (MAX_BINS - 1);
+                self.counts[axis][b] += 1;
+                self.boxes[axis][b].grow(r.min, r.max);
+            }
+        };
+        let mut pairs = refs.chunks_exact(2);
+        for pair in &mut pairs {
+            let (a, b) = (&pair[0], &pair[1]);
+            let (ba, bb) = (m.bins(a.centroid2()), m.bins(b.centroid2()));
+            add(a, ba);
+            add(b, bb);
+        }
+        for r in pairs.remainder() {
+            add(r, m.bins(r.centroid2()));
+        }
+    }
+
+    fn merge(&mut self, o: &Bins, nb: usize) {
+        for axis in 0..3 {
+            for b in 0..nb {
+                self.counts[axis][b] += o.counts[axis][b];
+                self.boxes[axis][b] = self.boxes[axis][b].union(&o.boxes[axis][b]);
+            }
         }
     }
 }
 
-/// Bins every reference on all three axes in one pass and returns the cheapest split by SAH.
-fn best_split(refs: &[PrimRef], centroids: &Box4, bins: &mut Bins) -> Option<Split> {
-    let nb = bins_for(refs.len());
-    let scale = bin_scale(centroids, nb);
-    let lo = centroids.min;
-    for axis in 0..3 {
-        bins.counts[axis][..nb].fill(0);
-        bins.boxes[axis][..nb].fill(Box4::EMPTY);
+impl<S: LeafSink> Builder<'_, S> {
+    /// Blocks a leaf of `n` primitives takes.
+    #[inline(always)]
+    fn blocks(&self, n: u32) -> f32 {
+        n.div_ceil(self.settings.block as u32) as f32
     }
-    for r in refs {
-        let b3 = bin_index(r.centroid2(), lo, scale, nb);
-        for (axis, b) in b3.into_iter().enumerate() {
-            // (the mask only tells the compiler the index is in range)
-            let b = b & (BINS - 1);
-            bins.counts[axis][b] += 1;
-            bins.boxes[axis][b].grow(r.min, r.max);
+
+    /// The cheapest binned split of `refs` by SAH, or `None` when every centroid coincides.
+    fn find(&self, refs: &[PrimRef], rec: &Record, bins: &mut Bins) -> Option<Split> {
+        let m = Mapping::new(&rec.centroids, refs.len(), self.settings.max_bins);
+        if m.scale.truncate() == glam::Vec3::ZERO {
+            return None;
         }
-    }
-    let mut best: Option<Split> = None;
-    let mut right_box = [Box4::EMPTY; BINS];
-    let mut right_count = [0u32; BINS];
-    for axis in 0..3 {
-        if scale[axis] == 0.0 {
-            continue;
+        let nb = m.nb;
+        if refs.len() > PARALLEL_PASS {
+            *bins = refs
+                .par_chunks(PARALLEL_PASS)
+                .map(|chunk| {
+                    let mut b = Bins::new();
+                    b.add_all(chunk, &m);
+                    b
+                })
+                .reduce(Bins::new, |mut a, b| {
+                    a.merge(&b, nb);
+                    a
+                });
+        } else {
+            bins.clear(nb);
+            bins.add_all(refs, &m);
         }
-        let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
-        // Sweep from the right: bounds and count of everything right of each boundary.
-        let mut acc = Box4::EMPTY;
-        let mut n = 0;
-        for i in (1..nb).rev() {
-            acc = acc.union(&boxes[i]);
-            n += counts[i];
-            right_box[i] = acc;
-            right_count[i] = n;
-        }
-        let mut acc = Box4::EMPTY;
-        let mut n = 0;
-        for i in 1..nb {
-            acc = acc.union(&boxes[i - 1]);
-            n += counts[i - 1];
-            if n == 0 || right_count[i] == 0 {
+        let mut best: Option<Split> = None;
+        let mut right_cost = [0.0f32; MAX_BINS];
+        for axis in 0..3 {
+            if m.scale[axis] == 0.0 {
                 continue;
             }
-            let cost =
-                acc.half_area() * n as f32 + right_box[i].half_area() * right_count[i] as f32;
-            if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split {
-                    axis,
-                    boundary: i,
-                    left: acc,
-                    right: right_box[i],
-                    left_count: n as usize,
-                    cost,
-                });
+            let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
+            // Sweep from the right: area times blocks of everything right of each boundary.
+            let mut acc = Box4::EMPTY;
+            let mut n = 0;
+            for i in (1..nb).rev() {
+                acc = acc.union(&boxes[i]);
+                n += counts[i];
+                right_cost[i] = if n == 0 {
+                    f32::INFINITY
+                } else {
+                    acc.half_area() * self.blocks(n)
+                };
+            }
+            let mut acc = Box4::EMPTY;
+            let mut n = 0;
+            for i in 1..nb {
+                acc = acc.union(&boxes[i - 1]);
+                n += counts[i - 1];
+                // an empty right side costs infinity
+                let cost = acc.half_area() * self.blocks(n) + right_cost[i];
+                if n > 0 && cost < f32::INFINITY && best.as_ref().is_none_or(|b| cost < b.cost) {
+                    best = Some(Split {
+                        axis,
+                        boundary: i,
+                        mapping: m,
+                        cost,
+                    });
+                }
+            }
+        }
+        best
+    }
+
+    /// Partitions `refs` by `split` (or, without one, by tag or into halves); returns the
+    /// position of the first right reference and the two sides' records.
+    fn partition(
+        &self,
+        refs: &mut [PrimRef],
+        rec: &Record,
+        split: Option<&Split>,
+    ) -> (usize, Record, Record) {
+        let mid_rec = |refs: &[PrimRef], mid: usize| {
+            let (l, r) = refs.split_at(mid);
+            (mid, Record::of(l), Record::of(r))
+        };
+        match split {
+            Some(s) => {
+                let (axis, boundary, m) = (s.axis, s.boundary, s.mapping);
+                partition_by(refs, &|r: &PrimRef| m.bins(r.centroid2())[axis] < boundary)
+            }
+            None if rec.tags.count_ones() > 1 => {
+                let tag = rec.tags.trailing_zeros();
+                partition_by(refs, &|r: &PrimRef| r.tag() == tag)
+            }
+            None => {
+                // Every centroid coincides: halves, in index order so the tree is the same
+                // whatever order the parallel passes left the references in.
+                refs.sort_unstable_by_key(PrimRef::id);
+                let mid = refs.len() / 2;
+                mid_rec(refs, mid)
             }
         }
     }
-    best
+
+    /// Builds the subtree over `refs` as a node at `depth` (the root is at 1), or a leaf.
+    fn subtree(&self, refs: &mut [PrimRef], rec: Record, depth: usize, bins: &mut Bins) -> NodeRef {
+        let n = refs.len();
+        let single = rec.tags.count_ones() == 1;
+        if single && (n <= self.settings.min_leaf || depth > MAX_DEPTH || n == 1) {
+            return self.leaf(refs);
+        }
+        // at the depth limit only kinds are separated
+        let split = if depth >= MAX_DEPTH {
+            None
+        } else {
+            self.find(refs, &rec, bins)
+        };
+        if single && n <= self.settings.max_leaf {
+            let area = rec.bounds.half_area();
+            let leaf_cost = area * self.blocks(n as u32);
+            let split_cost = split.map_or(f32::INFINITY, |s| {
+                self.settings.traversal_cost * area + s.cost
+            });
+            if leaf_cost <= split_cost {
+                return self.leaf(refs);
+            }
+        }
+        if single && depth >= MAX_DEPTH {
+            return self.leaf(refs);
+        }
+        // Open up to WIDTH children: split the first, then the largest splittable child.
+        let mut children: Vec<(usize, usize, Record, bool)> = Vec::with_capacity(WIDTH);
+        let (mid, l, r) = self.partition(refs, &rec, split.as_ref());
+        children.push((0, mid, l, true));
+        children.push((mid, n - mid, r, true));
+        while children.len() < WIDTH {
+            let pick = children
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.3 && (c.1 > self.settings.min_leaf || c.2.tags.count_ones() > 1))
+                .max_by(|a, b| {
+                    a.1.2
+                        .bounds
+                        .half_area()
+                        .total_cmp(&b.1.2.bounds.half_area())
+                })
+                .map(|(i, _)| i);
+            let Some(k) = pick else {
+                break;
+            };
+            let (start, len, crec, _) = children[k];
+            let part = &mut refs[start..start + len];
+            // at the depth limit only kinds are separated
+            let s = if depth >= MAX_DEPTH {
+                None
+            } else {
+                self.find(part, &crec, bins)
+            };
+            if s.is_none()
+                && crec.tags.count_ones() == 1
+                && (len <= self.settings.max_leaf || depth >= MAX_DEPTH)
+            {
+                children[k].3 = false;
+                continue;
+            }
+            let (m, cl, cr) = self.partition(part, &crec, s.as_ref());
+            children[k] = (start, m, cl, true);
+            children.push((start + m, len - m, cr, true));
+        }
+        let index = self.nodes.alloc(1);
+        // Largest child first (Embree: faster any-hit traversal); slices in memory order.
+        children.sort_by(|a, b| b.2.bounds.half_area().total_cmp(&a.2.bounds.half_area()));
+        let mut order: Vec<usize> = (0..children.len()).collect();
+        order.sort_by_key(|&i| children[i].0);
+        let mut slices: Vec<Option<&mut [PrimRef]>> = (0..children.len()).map(|_| None).collect();
+        let mut rest = &mut refs[..];
+        let mut at = 0;
+        for &i in &order {
+            let (start, len) = (children[i].0, children[i].1);
+            let (head, tail) = std::mem::take(&mut rest).split_at_mut(start - at + len);
+            slices[i] = Some(&mut head[start - at..]);
+            rest = tail;
+            at = start + len;
+        }
+        let jobs: Vec<(&mut [PrimRef], Record)> = slices
+            .into_iter()
+            .zip(&children)
+            .map(|(s, c)| (s.unwrap_or_default(), c.2))
+            .collect();
+        let refs_out: Vec<NodeRef> = if n > PARALLEL_SUBTREE {
+            jobs.into_par_iter()
+                .map(|(s, r)| self.subtree(s, r, depth + 1, &mut Bins::new()))
+                .collect()
+        } else {
+            jobs.into_iter()
+                .map(|(s, r)| self.subtree(s, r, depth + 1, bins))
+                .collect()
+        };
+        let kids: Vec<(NodeRef, Aabb)> = refs_out
+            .into_iter()
+            .zip(&children)
+            .map(|(r, c)| (r, c.2.bounds.aabb()))
+            .collect();
+        self.nodes.set(index, Node8::new(&kids));
+        NodeRef::node(index as u32)
+    }
+
+    /// A leaf over `refs` (one tag), stored by the sink.
+    fn leaf(&self, refs: &[PrimRef]) -> NodeRef {
+        assert!(
+            refs.len() <= NodeRef::MAX_LEAF_COUNT as usize,
+            "{} coincident primitives in one leaf",
+            refs.len()
+        );
+        let tag = refs[0].tag() as u8;
+        let mut small = [0u32; 16];
+        let mut big = Vec::new();
+        let ids: &mut [u32] = if refs.len() <= small.len() {
+            &mut small[..refs.len()]
+        } else {
+            big.resize(refs.len(), 0);
+            &mut big
+        };
+        for (id, r) in ids.iter_mut().zip(refs) {
+            *id = r.id();
+        }
+        ids.sort_unstable();
+        let first = self.sink.leaf(tag, ids);
+        NodeRef::leaf(Leaf {
+            tag,
+            first,
+            count: refs.len() as u32,
+        })
+    }
 }
 
-/// Partitions by the split's bin boundary (the same bin arithmetic as [`best_split`]); returns
-/// the split position and the two sides' centroid bounds, gathered on the way.
-fn partition_by_bin(refs: &mut [PrimRef], s: &Split, centroids: &Box4) -> (usize, Box4, Box4) {
-    let nb = bins_for(refs.len());
-    let scale = bin_scale(centroids, nb);
-    let lo = centroids.min;
-    let (mut cl, mut cr) = (Box4::EMPTY, Box4::EMPTY);
+/// Partitions `refs` so those `goes_left` come first; returns the split position and the two
+/// sides' records (gathered on the way). Big ranges partition in parallel chunks, then swap
+/// the misplaced references across the split position.
+fn partition_by(
+    refs: &mut [PrimRef],
+    goes_left: &(impl Fn(&PrimRef) -> bool + Sync),
+) -> (usize, Record, Record) {
+    if refs.len() <= PARALLEL_PASS {
+        return partition_serial(refs, goes_left);
+    }
+    let parts: Vec<(usize, Record, Record)> = refs
+        .par_chunks_mut(PARALLEL_PASS)
+        .map(|c| partition_serial(c, goes_left))
+        .collect();
+    let mid: usize = parts.iter().map(|p| p.0).sum();
+    let (mut l, mut r) = (Record::EMPTY, Record::EMPTY);
+    // Right references left of `mid` and left references right of it, chunk by chunk.
+    let mut wrong_right = Vec::new();
+    let mut wrong_left = Vec::new();
+    for (k, p) in parts.iter().enumerate() {
+        l = l.merge(&p.1);
+        r = r.merge(&p.2);
+        let start = k * PARALLEL_PASS;
+        let end = (start + PARALLEL_PASS).min(refs.len());
+        let split = start + p.0;
+        if split < mid {
+            wrong_right.push(split..end.min(mid));
+        }
+        if start.max(mid) < split {
+            wrong_left.push(start.max(mid)..split);
+        }
+    }
+    let a = wrong_right.into_iter().flatten();
+    let b = wrong_left.into_iter().flatten();
+    for (i, j) in a.zip(b) {
+        refs.swap(i, j);
+    }
+    (mid, l, r)
+}
+
+/// [`partition_by`] on one thread: each reference is examined once, at position `i`; one that
+/// goes right is swapped with the unexamined one at `j - 1`.
+fn partition_serial(
+    refs: &mut [PrimRef],
+    goes_left: &impl Fn(&PrimRef) -> bool,
+) -> (usize, Record, Record) {
+    let (mut l, mut r) = (Record::EMPTY, Record::EMPTY);
     let mut i = 0;
     let mut j = refs.len();
-    // Each reference is examined once, at position i; one that goes right is swapped with the
-    // unexamined one at j - 1.
     while i < j {
-        let c = refs[i].centroid2();
-        if bin_index(c, lo, scale, nb)[s.axis] < s.boundary {
-            cl.grow(c, c);
+        let p = refs[i];
+        if goes_left(&p) {
+            l.add(&p);
             i += 1;
         } else {
-            cr.grow(c, c);
+            r.add(&p);
             j -= 1;
             refs.swap(i, j);
         }
     }
-    (i, cl, cr)
-}
-
-/// Moves the references tagged like the first one to the front; returns their count.
-fn partition_by_tag(refs: &mut [PrimRef]) -> usize {
-    let tag = refs[0].tag();
-    let mut i = 0;
-    let mut j = refs.len();
-    while i < j {
-        if refs[i].tag() == tag {
-            i += 1;
-        } else {
-            j -= 1;
-            refs.swap(i, j);
-        }
-    }
-    i
+    (i, l, r)
 }

@@ -1,28 +1,58 @@
-//! A bounding volume hierarchy over primitive bounds, and its traversals. The tree knows nothing
-//! about spheres or triangles: it is built from boxes (and opaque tags that keep kinds apart in
-//! leaves), and every traversal takes the leaf test as a closure that receives a range of
-//! primitive indices (obvhs-style). Nodes are 32 bytes, depth first: an interior node's left
-//! child follows it, its right child is named.
+//! An 8-wide bounding volume hierarchy over primitive bounds, and its traversals. The tree
+//! knows nothing about spheres or triangles: it is built from boxes and opaque tags (a leaf never
+//! mixes tags), its leaves are whatever the caller's [`build::LeafSink`] stored for a group of
+//! primitives, and every traversal takes the leaf test as a closure that receives a [`Leaf`]
+//! (obvhs-style).
 //!
-//! Traversals: [`Bvh::closest_packet`] and [`Bvh::occluded_packet`] walk 8 rays at once (per-lane
-//! entry distances, culling of subtrees no active lane can reach nearer than its current hit,
-//! nearer child first by lane vote, any-hit stops when every lane is occluded);
-//! [`Bvh::closest`] and [`Bvh::occluded`] walk a single ray. [`Bvh::closest_packet_probed`]
-//! is the closest-hit packet walk reporting each node it visits to a [`TraversalProbe`] (the
-//! cost heatmap's counter; the ordinary walk passes [`NoProbe`], which compiles away).
+//! A [`Node8`] holds the boxes of its up to 8 children structure of arrays (one `F32x8` per
+//! box plane, lane `i` = child `i`) and a [`NodeRef`] per child, 256 bytes in all: one 8-lane
+//! pass tests all children against one ray. Unused slots come last and hold an inverted box that
+//! no ray enters.
+//!
+//! ```text
+//! primitive bounds + tags --build (binned SAH, 8-wide, parallel)--> Bvh8 { nodes, root }
+//!                                     '--LeafSink::leaf(tag, primitives)--> caller's leaf blocks
+//! traversals (leaf test as a closure):
+//!     single.rs  one ray, all 8 children per pass, nearest first     (incoherent rays)
+//!     packet.rs  8 rays, child by child, per-lane entry distances     (small coherent groups;
+//!                [`Bvh8::closest_packet_probed`] reports each node to a [`TraversalProbe`],
+//!                the cost heatmap's counter)
+//!     stream.rs  several packets sharing one frustum                  (camera and shadow rays)
+//! ```
 
+pub mod arena;
 pub mod build;
+mod packet;
+mod single;
+mod stack;
+mod stream;
 
-use std::ops::Range;
+pub use packet::PACKET_STACK_DEPTH;
+pub use stream::{MAX_STREAM, StreamMasks};
 
-use crate::math::{Ray, Vec3};
-use crate::packet::RayPacket;
-use crate::simd::{
-    F32x8, LANES, Mask, Vec3x8, all, any, bitmask, from_lanes, le, lt, max, min, select,
-};
+use crate::math::Vec3;
+use crate::simd::F32x8;
 
-/// The deepest a tree gets (the traversal stacks are sized by it).
-pub const MAX_DEPTH: usize = 64;
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// Told of every node a packet traversal visits, with the lanes that entered it (culled lanes
+/// excluded): the hook behind the cost heatmap. Monomorphised, so [`NoProbe`] costs nothing.
+pub trait TraversalProbe {
+    fn node(&mut self, lanes: crate::simd::Mask);
+}
+
+/// The probe of ordinary traversals: does nothing.
+pub struct NoProbe;
+
+impl TraversalProbe for NoProbe {
+    #[inline(always)]
+    fn node(&mut self, _lanes: crate::simd::Mask) {}
+}
+
+/// The deepest a tree gets, in nodes from the root (the traversal stacks are sized by it; the
+/// builder makes leaves there).
+pub const MAX_DEPTH: usize = 40;
 
 /// Relative widening of the slab test's exit distance, so that rounding never culls a box a
 /// ray touches (1 + 2 gamma(3), Pharr et al.).
@@ -77,22 +107,9 @@ impl Aabb {
     }
 }
 
-/// A node: its box and either a primitive range (leaf) or its right child (interior).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(32))]
-pub struct BvhNode {
-    pub min: [f32; 3],
-    /// Leaf: first primitive; interior: index of the right child (the left one is next).
-    pub first: u32,
-    pub max: [f32; 3],
-    /// Leaf: number of primitives (at least 1); interior: 0.
-    pub count: u32,
-}
-
-/// Nodes store their box grown by this fraction of its size and of its coordinates' magnitude
-/// on each axis, so a ray that only grazes a primitive's bounds (a tangent ray along a face,
-/// with a zero direction component) still enters the node. A parent's padding is never smaller
-/// than its children's.
+/// Nodes store their children's boxes grown by this fraction of the box's size and of its
+/// coordinates' magnitude on each axis, so a ray that only grazes a primitive's bounds (a tangent
+/// ray along a face, with a zero direction component) still enters the node.
 const PAD: f32 = 1.0 / (1 << 20) as f32;
 
 fn padded(b: &Aabb) -> Aabb {
@@ -103,52 +120,165 @@ fn padded(b: &Aabb) -> Aabb {
     }
 }
 
-impl BvhNode {
-    fn leaf(b: &Aabb, first: u32, count: u32) -> BvhNode {
-        let b = padded(b);
-        BvhNode {
-            min: b.min.to_array(),
-            first,
-            max: b.max.to_array(),
-            count,
-        }
-    }
+/// What a [`NodeRef`] names when it is a leaf: the tag of its primitives, and the `first`
+/// index and `count` the [`build::LeafSink`] chose for them (what they index is the sink's
+/// business).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Leaf {
+    pub tag: u8,
+    pub first: u32,
+    pub count: u32,
+}
 
-    fn interior(b: &Aabb, right: u32) -> BvhNode {
-        let b = padded(b);
-        BvhNode {
-            min: b.min.to_array(),
-            first: right,
-            max: b.max.to_array(),
-            count: 0,
-        }
-    }
+/// A child reference: an interior node's index, a leaf, or an empty slot. Bit 63 marks a leaf;
+/// a leaf keeps its tag in bits 56..63, its count in bits 32..56 and its first index in bits
+/// 0..32.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeRef(u64);
 
-    /// True for a leaf.
+const LEAF_BIT: u64 = 1 << 63;
+
+impl NodeRef {
+    /// An unused child slot.
+    pub const EMPTY: NodeRef = NodeRef(u64::MAX);
+
+    /// The most primitives one leaf may name.
+    pub const MAX_LEAF_COUNT: u32 = (1 << 24) - 1;
+
+    /// The interior node at `index`.
     #[inline(always)]
-    pub fn is_leaf(&self) -> bool {
-        self.count > 0
+    pub fn node(index: u32) -> NodeRef {
+        NodeRef(index as u64)
     }
 
-    /// The primitive range of a leaf.
+    /// A leaf.
     #[inline(always)]
-    pub fn prims(&self) -> Range<u32> {
-        self.first..self.first + self.count
+    pub fn leaf(leaf: Leaf) -> NodeRef {
+        debug_assert!(leaf.count <= Self::MAX_LEAF_COUNT && leaf.tag < 0x7f);
+        NodeRef(LEAF_BIT | (leaf.tag as u64) << 56 | (leaf.count as u64) << 32 | leaf.first as u64)
     }
 
-    /// The node's box.
-    pub fn aabb(&self) -> Aabb {
-        Aabb {
-            min: self.min.into(),
-            max: self.max.into(),
+    /// True for a leaf (or the empty slot).
+    #[inline(always)]
+    pub fn is_leaf(self) -> bool {
+        self.0 & LEAF_BIT != 0
+    }
+
+    /// True for the empty slot.
+    #[inline(always)]
+    pub fn is_empty(self) -> bool {
+        self == Self::EMPTY
+    }
+
+    /// The interior node's index.
+    #[inline(always)]
+    pub fn index(self) -> usize {
+        self.0 as u32 as usize
+    }
+
+    /// The leaf's contents.
+    #[inline(always)]
+    pub fn as_leaf(self) -> Leaf {
+        Leaf {
+            tag: (self.0 >> 56) as u8 & 0x7f,
+            first: self.0 as u32,
+            count: (self.0 >> 32) as u32 & Self::MAX_LEAF_COUNT,
         }
     }
 }
 
-/// A BVH: nodes depth first, root at 0. Empty when built over no primitive.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Bvh {
-    pub nodes: Vec<BvhNode>,
+/// Box planes in a node's `bounds`: the lower x, y, z planes, then the upper ones.
+const LO: usize = 0;
+const HI: usize = 3;
+
+/// An interior node: its children's boxes structure of arrays and their references. Children
+/// occupy slots `0..n`; the other slots are [`NodeRef::EMPTY`] with the inverted box
+/// (`lo = +inf`, `hi = -inf`), which the slab test rejects for every ray direction.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    /// `[lo_x, lo_y, lo_z, hi_x, hi_y, hi_z]`, lane `i` = child `i`.
+    pub bounds: [F32x8; 6],
+    pub child: [NodeRef; WIDTH],
+}
+
+const _: () = assert!(std::mem::size_of::<Node8>() == 256);
+
+impl Node8 {
+    /// A node over `children` (at most [`WIDTH`]) and their (unpadded) boxes.
+    pub fn new(children: &[(NodeRef, Aabb)]) -> Node8 {
+        assert!(children.len() <= WIDTH);
+        let mut planes = [[f32::INFINITY; WIDTH]; 6];
+        for p in &mut planes[HI..] {
+            *p = [f32::NEG_INFINITY; WIDTH];
+        }
+        let mut child = [NodeRef::EMPTY; WIDTH];
+        for (i, (r, b)) in children.iter().enumerate() {
+            let b = padded(b);
+            for axis in 0..3 {
+                planes[LO + axis][i] = b.min[axis];
+                planes[HI + axis][i] = b.max[axis];
+            }
+            child[i] = *r;
+        }
+        Node8 {
+            bounds: planes.map(F32x8::new),
+            child,
+        }
+    }
+
+    /// The number of children.
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.child.iter().take_while(|c| !c.is_empty()).count()
+    }
+
+    /// True when the node has no child (never, in a built tree).
+    pub fn is_empty(&self) -> bool {
+        self.child[0].is_empty()
+    }
+
+    /// The (padded) box of child `i`.
+    pub fn child_box(&self, i: usize) -> Aabb {
+        let p = |k: usize| self.bounds[k].as_array()[i];
+        Aabb {
+            min: Vec3::new(p(LO), p(LO + 1), p(LO + 2)),
+            max: Vec3::new(p(HI), p(HI + 1), p(HI + 2)),
+        }
+    }
+}
+
+/// An 8-wide BVH: interior nodes and the root reference (a leaf when everything fits in one).
+/// Empty when built over no primitive.
+#[derive(Clone, Debug)]
+pub struct Bvh8 {
+    pub nodes: Vec<Node8>,
+    pub root: NodeRef,
+    /// The box of everything (padded like a child's).
+    pub bounds: Aabb,
+}
+
+impl Default for Bvh8 {
+    fn default() -> Bvh8 {
+        Bvh8 {
+            nodes: Vec::new(),
+            root: NodeRef::EMPTY,
+            bounds: Aabb::EMPTY,
+        }
+    }
+}
+
+impl PartialEq for Bvh8 {
+    fn eq(&self, o: &Bvh8) -> bool {
+        self.root == o.root
+            && self.nodes.len() == o.nodes.len()
+            && self.nodes.iter().zip(&o.nodes).all(|(a, b)| {
+                a.child == b.child
+                    && a.bounds.iter().zip(&b.bounds).all(|(x, y)| {
+                        x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)
+                    })
+            })
+    }
 }
 
 /// Widens a distance by the relative rounding error of the slab test, in the direction that
@@ -160,430 +290,136 @@ fn widen(t: f32) -> f32 {
 
 /// [`widen`] for 8 lanes.
 #[inline(always)]
-fn widen_packet(t: F32x8) -> F32x8 {
+fn widen8(t: F32x8) -> F32x8 {
     t + t.abs() * F32x8::splat(ROBUST - 1.0)
 }
 
-/// Per-ray values the box test reuses: origin and reciprocal direction.
-struct RaySlabs {
-    origin: Vec3,
-    inv: Vec3,
-}
-
-impl RaySlabs {
-    #[inline(always)]
-    fn new(ray: &Ray) -> RaySlabs {
-        let safe = |d: f32| {
-            1.0 / if d.abs() < 1e-30 {
-                1e-30f32.copysign(d)
-            } else {
-                d
-            }
-        };
-        RaySlabs {
-            origin: ray.origin,
-            inv: Vec3::new(safe(ray.dir.x), safe(ray.dir.y), safe(ray.dir.z)),
-        }
-    }
-
-    /// The entry distance if the ray meets the box within `(tmin, tmax)`.
-    #[inline(always)]
-    fn test(&self, n: &BvhNode, tmin: f32, tmax: f32) -> Option<f32> {
-        let lo = (Vec3::from(n.min) - self.origin) * self.inv;
-        let hi = (Vec3::from(n.max) - self.origin) * self.inv;
-        let near = lo.min(hi).max_element().max(tmin);
-        let far = widen(lo.max(hi).min_element().min(tmax));
-        (near <= far).then_some(near)
+/// The reciprocal of a direction component, with zero replaced by a tiny value of the same
+/// sign (a zero would give `0 * inf = NaN` in the slab test).
+#[inline(always)]
+fn safe_inverse(d: f32) -> f32 {
+    1.0 / if d.abs() < 1e-30 {
+        1e-30f32.copysign(d)
+    } else {
+        d
     }
 }
 
-/// [`RaySlabs`] for 8 rays: origins and reciprocal directions.
-struct PacketSlabs {
-    origin: Vec3x8,
-    inv: Vec3x8,
-}
-
-impl PacketSlabs {
-    #[inline(always)]
-    fn new(rays: &RayPacket) -> PacketSlabs {
-        let safe = |d: F32x8| {
-            // A zero direction component would give 0 * inf = NaN in the slab test.
-            let tiny = F32x8::splat(1e-30);
-            let small = lt(d.abs(), tiny);
-            F32x8::splat(1.0) / select(small, select(lt(d, F32x8::splat(0.0)), -tiny, tiny), d)
-        };
-        PacketSlabs {
-            origin: rays.origin,
-            inv: Vec3x8 {
-                x: safe(rays.dir.x),
-                y: safe(rays.dir.y),
-                z: safe(rays.dir.z),
-            },
-        }
-    }
-
-    /// Lanes whose ray meets the box within `(tmin, tmax)`, and their entry distances.
-    /// `(plane - origin) * inv` (not a fused `plane * inv - origin * inv`) keeps the error
-    /// relative to the distance itself, which the widening by `ROBUST` then covers.
-    #[inline(always)]
-    fn test(&self, n: &BvhNode, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
-        let slab = |lo: f32, hi: f32, o: F32x8, inv: F32x8| {
-            let a = (F32x8::splat(lo) - o) * inv;
-            let b = (F32x8::splat(hi) - o) * inv;
-            (min(a, b), max(a, b))
-        };
-        let (x0, x1) = slab(n.min[0], n.max[0], self.origin.x, self.inv.x);
-        let (y0, y1) = slab(n.min[1], n.max[1], self.origin.y, self.inv.y);
-        let (z0, z1) = slab(n.min[2], n.max[2], self.origin.z, self.inv.z);
-        let near = max(max(x0, y0), max(z0, tmin));
-        let far = widen_packet(min(min(x1, y1), min(z1, tmax)));
-        (le(near, far), near)
-    }
-}
-
-thread_local! {
-    /// The closest-hit packet traversal's stack (one per thread, reused by every call; the
-    /// traversal never runs inside its own leaf test).
-    static PACKET_STACK: std::cell::RefCell<Vec<Pending>> =
-        const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// A pending subtree of a packet traversal: the node and its lanes' entry distances.
-#[derive(Clone, Copy)]
-struct Pending {
-    node: u32,
-    near: [f32; LANES],
-    lanes: [f32; LANES],
-}
-
-impl Pending {
-    /// An entry from SIMD values (plain arrays keep the stack small and cheap to set up).
-    #[inline(always)]
-    fn new(node: u32, near: F32x8, lanes: Mask) -> Pending {
-        Pending {
-            node,
-            near: crate::simd::lanes(near),
-            lanes: crate::simd::lanes(lanes),
-        }
-    }
-}
-
-/// Told of every node a packet traversal visits, with the lanes that entered it (culled lanes
-/// excluded): the hook behind the cost heatmap. Monomorphised, so [`NoProbe`] costs nothing.
-pub trait TraversalProbe {
-    fn node(&mut self, lanes: Mask);
-}
-
-/// The probe of ordinary traversals: does nothing.
-pub struct NoProbe;
-
-impl TraversalProbe for NoProbe {
-    #[inline(always)]
-    fn node(&mut self, _lanes: Mask) {}
-}
-
-impl Bvh {
-    /// True when the tree has no node.
+impl Bvh8 {
+    /// True when the tree holds nothing.
     pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
+        self.root.is_empty()
     }
 
-    /// Single-ray twin of [`Bvh::closest_packet`]: `leaf(range, tmax)` lowers `tmax` on hits.
-    pub fn closest(
+    /// Interior nodes and leaves.
+    pub fn counts(&self) -> (usize, usize) {
+        let leaves = self
+            .nodes
+            .iter()
+            .flat_map(|n| n.child.iter())
+            .filter(|c| c.is_leaf() && !c.is_empty())
+            .count();
+        let root_leaf = usize::from(self.root.is_leaf() && !self.root.is_empty());
+        (self.nodes.len(), leaves + root_leaf)
+    }
+
+    /// Checks the tree's invariants against the primitive bounds and tags it was built over;
+    /// `leaf_prims(leaf)` lists the primitives a leaf holds: every primitive in exactly one
+    /// leaf, every node reached exactly once within [`MAX_DEPTH`], every child's box inside its
+    /// parent's and holding its primitives, children packed first with inverted boxes in the
+    /// unused slots, at least two children per node, no leaf mixing tags.
+    pub fn validate(
         &self,
-        ray: &Ray,
-        tmin: f32,
-        tmax: &mut f32,
-        mut leaf: impl FnMut(Range<u32>, &mut f32),
-    ) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let slabs = RaySlabs::new(ray);
-        let Some(near) = slabs.test(&self.nodes[0], tmin, *tmax) else {
-            return;
-        };
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        stack[0] = (0, near);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (mut node, near) = stack[top];
-            if near > widen(*tmax) {
-                continue;
-            }
-            loop {
-                let n = &self.nodes[node as usize];
-                if n.is_leaf() {
-                    leaf(n.prims(), tmax);
-                    break;
-                }
-                let (left, right) = (node + 1, n.first);
-                let l = slabs.test(&self.nodes[left as usize], tmin, *tmax);
-                let r = slabs.test(&self.nodes[right as usize], tmin, *tmax);
-                match (l, r) {
-                    (None, None) => break,
-                    (Some(_), None) => node = left,
-                    (None, Some(_)) => node = right,
-                    (Some(nl), Some(nr)) => {
-                        let (first, second) = if nl <= nr {
-                            (left, (right, nr))
-                        } else {
-                            (right, (left, nl))
-                        };
-                        stack[top] = second;
-                        top += 1;
-                        node = first;
-                    }
-                }
-            }
-        }
-    }
-
-    /// Visits, for the active lanes of `rays`, every leaf one of them may hit nearer than its
-    /// `tmax` lane; `leaf(range, rays, tmax)` tests the leaf's primitives for the packet's
-    /// active lanes and lowers their `tmax` where it finds nearer hits. Nearer children go
-    /// first so `tmax` shrinks early and culls more. The packet stays together to the leaves
-    /// however few lanes remain (a switch to single rays measured slower: PERF.md).
-    pub fn closest_packet(
-        &self,
-        rays: &RayPacket,
-        tmax: &mut F32x8,
-        leaf: impl FnMut(Range<u32>, &RayPacket, &mut F32x8),
-    ) {
-        self.closest_packet_probed(rays, tmax, leaf, &mut NoProbe);
-    }
-
-    /// [`Bvh::closest_packet`] reporting every node it visits to `probe`, with the lanes that
-    /// entered it (the cost heatmap counts them); with [`NoProbe`] it is `closest_packet`.
-    pub fn closest_packet_probed(
-        &self,
-        rays: &RayPacket,
-        tmax: &mut F32x8,
-        mut leaf: impl FnMut(Range<u32>, &RayPacket, &mut F32x8),
-        probe: &mut impl TraversalProbe,
-    ) {
-        if self.nodes.is_empty() || !any(rays.active) {
-            return;
-        }
-        let slabs = PacketSlabs::new(rays);
-        let mut local = *rays;
-        let (hit, near) = slabs.test(&self.nodes[0], rays.tmin, *tmax);
-        // The stack lives with the thread: a fresh array per call cost a 4 KB memset.
-        PACKET_STACK.with_borrow_mut(|stack| {
-            stack.clear();
-            stack.push(Pending::new(0, near, hit & rays.active));
-            while let Some(entry) = stack.pop() {
-                let mut node = entry.node;
-                let (near, lanes) = (from_lanes(entry.near), from_lanes(entry.lanes));
-                // cull: no lane of this subtree can hit nearer than its current hit
-                let mut lanes = lanes & le(near, widen_packet(*tmax));
-                if !any(lanes) {
-                    continue;
-                }
-                loop {
-                    let n = &self.nodes[node as usize];
-                    probe.node(lanes);
-                    if n.is_leaf() {
-                        local.active = lanes;
-                        leaf(n.prims(), &local, tmax);
-                        break;
-                    }
-                    let (left, right) = (node + 1, n.first);
-                    let (hl, nl) = slabs.test(&self.nodes[left as usize], rays.tmin, *tmax);
-                    let (hr, nr) = slabs.test(&self.nodes[right as usize], rays.tmin, *tmax);
-                    let (hl, hr) = (hl & lanes, hr & lanes);
-                    match (any(hl), any(hr)) {
-                        (false, false) => break,
-                        (true, false) => (node, lanes) = (left, hl),
-                        (false, true) => (node, lanes) = (right, hr),
-                        (true, true) => {
-                            // order: the child more lanes enter first goes first
-                            let both = hl & hr;
-                            let left_first = bitmask(both & lt(nl, nr)).count_ones() * 2
-                                >= bitmask(both).count_ones();
-                            let (first, second) = if left_first {
-                                ((left, hl, nl), (right, hr, nr))
-                            } else {
-                                ((right, hr, nr), (left, hl, nl))
-                            };
-                            stack.push(Pending::new(second.0, second.2, second.1));
-                            (node, lanes) = (first.0, first.1);
-                        }
-                    }
-                }
-            }
-        });
-    }
-
-    /// Single-ray twin of [`Bvh::occluded_packet`]: stops at the first leaf that blocks.
-    pub fn occluded(
-        &self,
-        ray: &Ray,
-        tmin: f32,
-        tmax: f32,
-        mut leaf: impl FnMut(Range<u32>) -> bool,
-    ) -> bool {
-        if self.nodes.is_empty() {
-            return false;
-        }
-        let slabs = RaySlabs::new(ray);
-        let mut stack = [0u32; MAX_DEPTH];
-        let mut top = 0;
-        if slabs.test(&self.nodes[0], tmin, tmax).is_none() {
-            return false;
-        }
-        let mut node = 0;
-        loop {
-            let n = &self.nodes[node as usize];
-            if n.is_leaf() {
-                if leaf(n.prims()) {
-                    return true;
-                }
-            } else {
-                let (left, right) = (node + 1, n.first);
-                let l = slabs.test(&self.nodes[left as usize], tmin, tmax).is_some();
-                let r = slabs
-                    .test(&self.nodes[right as usize], tmin, tmax)
-                    .is_some();
-                match (l, r) {
-                    (true, true) => {
-                        stack[top] = right;
-                        top += 1;
-                        node = left;
-                        continue;
-                    }
-                    (true, false) => {
-                        node = left;
-                        continue;
-                    }
-                    (false, true) => {
-                        node = right;
-                        continue;
-                    }
-                    (false, false) => {}
-                }
-            }
-            if top == 0 {
-                return false;
-            }
-            top -= 1;
-            node = stack[top];
-        }
-    }
-
-    /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves
-    /// until every active lane is occluded; `leaf(range, rays)` returns the lanes (of the
-    /// packet's active ones) blocked by the leaf's primitives.
-    pub fn occluded_packet(
-        &self,
-        rays: &RayPacket,
-        tmax: F32x8,
-        mut leaf: impl FnMut(Range<u32>, &RayPacket) -> Mask,
-    ) -> Mask {
-        let mut occluded = crate::simd::mask_none();
-        if self.nodes.is_empty() || !any(rays.active) {
-            return occluded;
-        }
-        let slabs = PacketSlabs::new(rays);
-        let mut local = *rays;
-        let mut stack = [(0u32, rays.active); MAX_DEPTH];
-        let (hit, _) = slabs.test(&self.nodes[0], rays.tmin, tmax);
-        stack[0] = (0, hit & rays.active);
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (mut node, lanes) = stack[top];
-            let mut lanes = lanes & !occluded;
-            if !any(lanes) {
-                continue;
-            }
-            loop {
-                let n = &self.nodes[node as usize];
-                if n.is_leaf() {
-                    local.active = lanes;
-                    occluded |= leaf(n.prims(), &local);
-                    // early exit: every active lane is blocked
-                    if all(occluded | !rays.active) {
-                        return occluded;
-                    }
-                    break;
-                }
-                let (left, right) = (node + 1, n.first);
-                let (hl, _) = slabs.test(&self.nodes[left as usize], rays.tmin, tmax);
-                let (hr, _) = slabs.test(&self.nodes[right as usize], rays.tmin, tmax);
-                let (hl, hr) = (hl & lanes, hr & lanes);
-                match (any(hl), any(hr)) {
-                    (false, false) => break,
-                    (true, false) => (node, lanes) = (left, hl),
-                    (false, true) => (node, lanes) = (right, hr),
-                    (true, true) => {
-                        stack[top] = (right, hr);
-                        top += 1;
-                        (node, lanes) = (left, hl);
-                    }
-                }
-            }
-        }
-        occluded
-    }
-
-    /// Checks the tree's invariants against the primitive bounds and tags it was built from
-    /// (after reordering: primitive `i` of a leaf range is `bounds[i]`): every primitive in
-    /// exactly one leaf, boxes nested, leaves hold their primitives and never mix tags,
-    /// depth within [`MAX_DEPTH`].
-    pub fn validate(&self, bounds: &[Aabb], tags: &[u8]) -> Result<(), String> {
+        bounds: &[Aabb],
+        tags: &[u8],
+        leaf_prims: impl Fn(Leaf) -> Vec<u32>,
+    ) -> Result<(), String> {
         if bounds.is_empty() {
-            return if self.nodes.is_empty() {
+            return if self.is_empty() && self.nodes.is_empty() {
                 Ok(())
             } else {
-                Err("nodes without primitives".into())
+                Err("a tree without primitives".into())
             };
         }
-        let mut seen = vec![false; bounds.len()];
-        let mut stack = vec![(0u32, 0usize)];
-        let mut visited = 0;
-        while let Some((i, depth)) = stack.pop() {
-            visited += 1;
-            if depth >= MAX_DEPTH {
-                return Err(format!("node {i} at depth {depth}"));
-            }
-            let n = self
-                .nodes
-                .get(i as usize)
-                .ok_or_else(|| format!("node {i} out of range"))?;
-            let b = n.aabb();
-            if n.is_leaf() {
-                let r = n.prims();
-                if r.end as usize > bounds.len() {
-                    return Err(format!("leaf {i} range {r:?} out of bounds"));
-                }
-                for p in r.clone() {
-                    if std::mem::replace(&mut seen[p as usize], true) {
-                        return Err(format!("primitive {p} in two leaves"));
-                    }
-                    if !b.contains(&bounds[p as usize]) {
-                        return Err(format!("leaf {i} does not hold primitive {p}"));
-                    }
-                    if tags[p as usize] != tags[r.start as usize] {
-                        return Err(format!("leaf {i} mixes tags"));
-                    }
-                }
-            } else {
-                let (l, r) = (i + 1, n.first);
-                if r <= l || r as usize >= self.nodes.len() {
-                    return Err(format!("interior node {i} has bad children {l}, {r}"));
-                }
-                for c in [l, r] {
-                    if !b.contains(&self.nodes[c as usize].aabb()) {
-                        return Err(format!("node {i} does not hold child {c}"));
-                    }
-                    stack.push((c, depth + 1));
-                }
-            }
+        if self.is_empty() {
+            return Err(format!("no tree over {} primitives", bounds.len()));
         }
-        if visited != self.nodes.len() {
-            return Err(format!("{} nodes, {visited} reachable", self.nodes.len()));
+        let mut seen = vec![false; bounds.len()];
+        let mut reached = vec![false; self.nodes.len()];
+        let mut check_leaf = |leaf: Leaf, b: &Aabb| -> Result<(), String> {
+            let prims = leaf_prims(leaf);
+            if prims.is_empty() || prims.len() != leaf.count as usize {
+                return Err(format!("leaf {leaf:?} holds {} primitives", prims.len()));
+            }
+            for p in prims {
+                let p = p as usize;
+                if p >= bounds.len() {
+                    return Err(format!(
+                        "leaf {leaf:?} names primitive {p} of {}",
+                        bounds.len()
+                    ));
+                }
+                if std::mem::replace(&mut seen[p], true) {
+                    return Err(format!("primitive {p} in two leaves"));
+                }
+                if !b.contains(&bounds[p]) {
+                    return Err(format!("leaf {leaf:?}'s box does not hold primitive {p}"));
+                }
+                if tags[p] != leaf.tag {
+                    return Err(format!(
+                        "leaf {leaf:?} holds primitive {p} tagged {}",
+                        tags[p]
+                    ));
+                }
+            }
+            Ok(())
+        };
+        if self.root.is_leaf() {
+            if !self.nodes.is_empty() {
+                return Err("a leaf root with interior nodes".into());
+            }
+            check_leaf(self.root.as_leaf(), &self.bounds)?;
+        } else {
+            let mut stack = vec![(self.root, self.bounds, 1usize)];
+            while let Some((r, b, depth)) = stack.pop() {
+                if depth > MAX_DEPTH {
+                    return Err(format!("node {} at depth {depth}", r.index()));
+                }
+                let i = r.index();
+                let n = self
+                    .nodes
+                    .get(i)
+                    .ok_or_else(|| format!("node {i} out of range"))?;
+                if std::mem::replace(&mut reached[i], true) {
+                    return Err(format!("node {i} reached twice"));
+                }
+                let count = n.len();
+                if count < 2 {
+                    return Err(format!("node {i} has {count} children"));
+                }
+                for slot in 0..WIDTH {
+                    let (c, cb) = (n.child[slot], n.child_box(slot));
+                    if slot >= count {
+                        let inverted = cb.min.cmpeq(Vec3::INFINITY).all()
+                            && cb.max.cmpeq(Vec3::NEG_INFINITY).all();
+                        if !c.is_empty() || !inverted {
+                            return Err(format!("node {i}: slot {slot} after the last child"));
+                        }
+                        continue;
+                    }
+                    if !b.contains(&cb) {
+                        return Err(format!("node {i}'s box does not hold child {slot}"));
+                    }
+                    if c.is_leaf() {
+                        check_leaf(c.as_leaf(), &cb)?;
+                    } else {
+                        stack.push((c, cb, depth + 1));
+                    }
+                }
+            }
+            if let Some(i) = reached.iter().position(|r| !r) {
+                return Err(format!("node {i} is not reachable"));
+            }
         }
         match seen.iter().position(|s| !s) {
             Some(p) => Err(format!("primitive {p} in no leaf")),
@@ -591,5 +427,3 @@ impl Bvh {
         }
     }
 }
-
-const _: () = assert!(std::mem::size_of::<BvhNode>() == 32);

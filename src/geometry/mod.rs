@@ -1,39 +1,43 @@
 //! The packet tracer's view of a scene: every primitive flattened to world space and stored
-//! structure of arrays ([`soa`]), with closest-hit and any-hit queries for single rays and for
-//! 8-ray packets. Flattening bakes transforms: triangles and planes to world space, spheres under
-//! similarity transforms to world-space spheres, and other spheres kept as transformed spheres
-//! (inverse affine to the unit sphere, normals by the inverse transpose).
+//! structure of arrays ([`soa`]), an 8-wide BVH over the bounded ones whose leaves are blocks of
+//! primitives stored ready for intersection ([`blocks`]), and closest-hit and any-hit queries
+//! for single rays, 8-ray packets and streams of packets ([`query`]). Flattening bakes
+//! transforms: triangles and planes to world space, spheres under similarity transforms to
+//! world-space spheres, and other spheres kept as transformed spheres (inverse affine to the
+//! unit sphere, normals by the inverse transpose).
 //!
 //! ```text
 //! Scene.root (tree) --flatten--> Geometry { triangles, spheres, transformed spheres, planes }
-//!                                    | closest_hit_packet / occluded_packet (wavefront)
-//!                                    | closest_hit / occluded (single rays)
+//!                                    | build_bvh: Bvh8 + leaf Blocks (Triangle4, Sphere4)
+//!                                    | closest_hit / occluded                 (single rays)
+//!                                    | closest_hit_packet / occluded_packet   (8 rays)
+//!                                    | closest_hit_stream / occluded_stream   (up to 8 packets)
 //! ```
 //!
 //! A hit names its primitive by a geometry index: triangles first, then spheres, transformed
-//! spheres and planes, each kind in its array order. [`Geometry::surface`] turns it back into a
-//! normal, a material and the scene id. [`Geometry::build_bvh`] builds one BVH over all bounded
-//! primitives (planes are tested apart), reorders the arrays so each leaf is a contiguous range
-//! of one kind, and hands the BVH the leaf test as a closure over a range of geometry indices.
+//! spheres and planes, each kind in the order flattening met it. The index is stable: building
+//! the BVH copies primitives into leaf blocks and reorders nothing, so per-primitive data kept
+//! beside the arrays (normals, materials, ids; or per-vertex normals of a caller) is looked up
+//! by it after the hit. [`Geometry::surface`] turns it into a normal (a smooth mesh's corner
+//! normals, kept in [`normals`], interpolated by [`crate::math::barycentrics`] of the one hit),
+//! a material and the scene id. Planes have no bounds and are tested apart from the BVH.
 
+pub mod blocks;
 pub mod normals;
+mod query;
 pub mod soa;
 
-use crate::bvh::{self, Aabb, Bvh, TraversalProbe};
+use crate::bvh::build::BuildSettings;
+use crate::bvh::{self, Aabb, Bvh8, Leaf};
+use crate::intersect::Hit;
 use crate::intersect::sphere::{affine_point, affine_vector};
-use crate::intersect::{
-    Hit, intersect_plane, intersect_plane_packet, intersect_sphere, intersect_sphere_packet,
-    intersect_transformed_sphere, intersect_transformed_sphere_packet, intersect_triangle,
-    intersect_triangle_packet,
-};
 use crate::math::{Mat3, Mat4, Ray, Vec3, barycentrics};
-use crate::packet::{HitPacket, RayPacket};
 use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
-use crate::simd::{F32x8, I32x8, LANES, Mask, all, any, bitmask, mask_none, select, select_i32};
+use blocks::{BLOCK, BlockSink, Blocks};
 use normals::CornerNormals;
+pub use query::{COHERENT_COS, Path, choose_path};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
-use std::ops::Range;
 
 /// The kinds of primitive, in geometry-index order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,6 +46,19 @@ pub enum PrimKind {
     Sphere,
     TransformedSphere,
     Plane,
+}
+
+impl PrimKind {
+    /// The kind a BVH leaf tag names (tags are `kind as u8`).
+    #[inline(always)]
+    pub fn from_tag(tag: u8) -> PrimKind {
+        match tag {
+            0 => PrimKind::Triangle,
+            1 => PrimKind::Sphere,
+            2 => PrimKind::TransformedSphere,
+            _ => PrimKind::Plane,
+        }
+    }
 }
 
 /// All primitives of a scene in world space, ready for intersection.
@@ -54,11 +71,13 @@ pub struct Geometry {
     /// Corner normals of smooth mesh triangles, by scene id (outside the kernels' data).
     pub corner_normals: CornerNormals,
     /// Over the bounded primitives; empty until [`Geometry::build_bvh`].
-    bvh: Bvh,
+    bvh: Bvh8,
+    /// The BVH's leaves.
+    blocks: Blocks,
 }
 
 impl Geometry {
-    /// Flattens the scene's object tree.
+    /// Flattens the scene's object tree and builds the BVH.
     pub fn from_scene(scene: &Scene) -> Geometry {
         let mut g = Geometry::default();
         flatten(&scene.root, &Mat4::IDENTITY, &Mat3::IDENTITY, true, &mut g);
@@ -76,30 +95,31 @@ impl Geometry {
         self.len() == 0
     }
 
-    fn sphere_base(&self) -> usize {
-        self.triangles.len()
-    }
-
-    fn transformed_base(&self) -> usize {
-        self.sphere_base() + self.spheres.len()
-    }
-
-    fn plane_base(&self) -> usize {
-        self.transformed_base() + self.transformed.len()
+    /// The geometry index of the first primitive of `kind`.
+    #[inline(always)]
+    pub fn base(&self, kind: PrimKind) -> usize {
+        let t = self.triangles.len();
+        match kind {
+            PrimKind::Triangle => 0,
+            PrimKind::Sphere => t,
+            PrimKind::TransformedSphere => t + self.spheres.len(),
+            PrimKind::Plane => t + self.spheres.len() + self.transformed.len(),
+        }
     }
 
     /// The kind of the primitive with geometry index `prim` and its index in its array.
     pub fn locate(&self, prim: u32) -> (PrimKind, usize) {
         let p = prim as usize;
-        if p < self.sphere_base() {
-            (PrimKind::Triangle, p)
-        } else if p < self.transformed_base() {
-            (PrimKind::Sphere, p - self.sphere_base())
-        } else if p < self.plane_base() {
-            (PrimKind::TransformedSphere, p - self.transformed_base())
+        let kind = if p < self.base(PrimKind::Sphere) {
+            PrimKind::Triangle
+        } else if p < self.base(PrimKind::TransformedSphere) {
+            PrimKind::Sphere
+        } else if p < self.base(PrimKind::Plane) {
+            PrimKind::TransformedSphere
         } else {
-            (PrimKind::Plane, p - self.plane_base())
-        }
+            PrimKind::Plane
+        };
+        (kind, p - self.base(kind))
     }
 
     /// The surface hit by `ray` at `t` on primitive `prim`: unit world normal, material, scene id.
@@ -153,37 +173,31 @@ impl Geometry {
         }
     }
 
-    /// Builds the BVH over the bounded primitives (all but planes), reordering the SoA arrays
-    /// so that every leaf is one contiguous range of one of them. Queries use it from then on.
+    /// Builds the BVH over the bounded primitives (all but planes) with the default settings.
+    /// Queries use it from then on.
     pub fn build_bvh(&mut self) {
-        let bounded = self.plane_base();
-        let mut bounds = Vec::with_capacity(bounded);
-        let mut tags = Vec::with_capacity(bounded);
-        for g in 0..bounded as u32 {
-            let (kind, _) = self.locate(g);
-            bounds.push(self.bounds(g));
-            tags.push(kind as u8);
-        }
-        let (mut bvh, order) = bvh::build::build(&bounds, &tags);
-        // New geometry index of each position of `order`, and each kind's new order.
-        let bases = [0, self.sphere_base(), self.transformed_base()];
-        let mut next = bases;
-        let mut orders: [Vec<u32>; 3] = Default::default();
-        let mut new_index = Vec::with_capacity(order.len());
-        for &g in &order {
-            let (kind, i) = self.locate(g);
-            let k = kind as usize;
-            new_index.push(next[k] as u32);
-            next[k] += 1;
-            orders[k].push(i as u32);
-        }
-        for node in bvh.nodes.iter_mut().filter(|n| n.is_leaf()) {
-            node.first = new_index[node.first as usize];
-        }
-        self.triangles.permute(&orders[0]);
-        self.spheres.permute(&orders[1]);
-        self.transformed.permute(&orders[2]);
+        self.build_bvh_with(&BuildSettings::default());
+    }
+
+    /// Builds the BVH with the given builder settings (see [`BuildSettings`]). Leaves are
+    /// blocks of [`BLOCK`] primitives, so the SAH prices leaves in blocks of that width.
+    pub fn build_bvh_with(&mut self, settings: &BuildSettings) {
+        let bounded = self.base(PrimKind::Plane);
+        let settings = BuildSettings {
+            block: BLOCK,
+            ..*settings
+        };
+        let g = &*self;
+        let sink = BlockSink::new(g);
+        let bvh = bvh::build::build(
+            bounded,
+            |i| (g.bounds(i as u32), g.locate(i as u32).0 as u8),
+            &settings,
+            &sink,
+        );
+        let blocks = sink.finish();
         self.bvh = bvh;
+        self.blocks = blocks;
     }
 
     /// The bounds of primitive `g` (planes have none: infinite box).
@@ -227,299 +241,88 @@ impl Geometry {
         }
     }
 
-    /// Checks the BVH against the primitives it was built over (see [`Bvh::validate`]).
+    /// The geometry indices a leaf holds.
+    pub fn leaf_prims(&self, leaf: Leaf) -> Vec<u32> {
+        let (first, count) = (leaf.first as usize, leaf.count as usize);
+        let kind = PrimKind::from_tag(leaf.tag);
+        let lanes = |prims: &mut dyn Iterator<Item = u32>| -> Vec<u32> {
+            prims.filter(|&p| p != u32::MAX).collect()
+        };
+        match kind {
+            PrimKind::Triangle => lanes(
+                &mut self.blocks.triangles
+                    [first..(first + count.div_ceil(BLOCK)).min(self.blocks.triangles.len())]
+                    .iter()
+                    .flat_map(|b| b.prim),
+            ),
+            PrimKind::Sphere => lanes(
+                &mut self.blocks.spheres
+                    [first..(first + count.div_ceil(BLOCK)).min(self.blocks.spheres.len())]
+                    .iter()
+                    .flat_map(|b| b.prim),
+            ),
+            PrimKind::TransformedSphere => {
+                let base = self.base(kind) as u32;
+                self.blocks.transformed[first..(first + count).min(self.blocks.transformed.len())]
+                    .iter()
+                    .map(|&i| base + i)
+                    .collect()
+            }
+            PrimKind::Plane => Vec::new(),
+        }
+    }
+
+    /// Checks the BVH against the primitives it was built over (see [`Bvh8::validate`]) and
+    /// the leaf blocks against the primitives they copy: each lane holds its primitive's data,
+    /// unused lanes only at a leaf's end.
     pub fn validate_bvh(&self) -> Result<(), String> {
-        let (bounds, tags): (Vec<Aabb>, Vec<u8>) = self
-            .bounded_range()
+        let bounded = 0..self.base(PrimKind::Plane) as u32;
+        let (bounds, tags): (Vec<Aabb>, Vec<u8>) = bounded
             .map(|g| (self.bounds(g), self.locate(g).0 as u8))
             .unzip();
-        self.bvh.validate(&bounds, &tags)
+        self.bvh
+            .validate(&bounds, &tags, |leaf| self.leaf_prims(leaf))?;
+        for (k, b) in self.blocks.triangles.iter().enumerate() {
+            for lane in 0..BLOCK {
+                let p = b.prim[lane];
+                if p == u32::MAX {
+                    if b.prim[lane..].iter().any(|&q| q != u32::MAX) {
+                        return Err(format!("triangle block {k}: a gap before lane {lane}"));
+                    }
+                    continue;
+                }
+                let (kind, i) = self.locate(p);
+                if kind != PrimKind::Triangle || b.lane(lane) != self.triangles.get(i) {
+                    return Err(format!(
+                        "triangle block {k} lane {lane} is not primitive {p}"
+                    ));
+                }
+            }
+        }
+        for (k, b) in self.blocks.spheres.iter().enumerate() {
+            for lane in 0..BLOCK {
+                let p = b.prim[lane];
+                if p == u32::MAX {
+                    continue;
+                }
+                let (kind, i) = self.locate(p);
+                let want = (self.spheres.center(i), self.spheres.radius2[i]);
+                if kind != PrimKind::Sphere || b.lane(lane) != want {
+                    return Err(format!("sphere block {k} lane {lane} is not primitive {p}"));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The BVH (empty before [`Geometry::build_bvh`]).
-    pub fn bvh(&self) -> &Bvh {
+    pub fn bvh(&self) -> &Bvh8 {
         &self.bvh
     }
 
-    fn planes_range(&self) -> Range<u32> {
-        self.plane_base() as u32..self.len() as u32
-    }
-
-    fn bounded_range(&self) -> Range<u32> {
-        0..self.plane_base() as u32
-    }
-
-    /// The closest hit of one ray in `(tmin, tmax)`: `(t, geometry index)`.
-    pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
-        let mut best = None;
-        let mut limit = tmax;
-        let mut leaf = |range: Range<u32>, limit: &mut f32| {
-            if let Some(hit) = self.closest_in(range, ray, tmin, *limit) {
-                *limit = hit.0;
-                best = Some(hit);
-            }
-        };
-        if self.bvh.is_empty() {
-            leaf(self.bounded_range(), &mut limit);
-        } else {
-            self.bvh.closest(ray, tmin, &mut limit, &mut leaf);
-        }
-        leaf(self.planes_range(), &mut limit);
-        best
-    }
-
-    /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
-    /// are left untouched.
-    pub fn closest_hit_packet(&self, rays: &RayPacket, hit: &mut HitPacket) {
-        let HitPacket { t, prim } = hit;
-        if self.bvh.is_empty() {
-            self.closest_in_packet(self.bounded_range(), rays, t, prim);
-        } else {
-            self.bvh.closest_packet(rays, t, |range, rays, t| {
-                self.closest_in_packet(range, rays, t, prim)
-            });
-        }
-        self.closest_in_packet(self.planes_range(), rays, t, prim);
-    }
-
-    /// [`Geometry::closest_hit_packet`] that also adds to `cost` each lane's traversal work:
-    /// BVH nodes it entered plus primitives tested for it (planes included). The heatmap's
-    /// counter; the same traversal, in the same order, as the render's.
-    pub fn closest_hit_packet_counted(
-        &self,
-        rays: &RayPacket,
-        hit: &mut HitPacket,
-        cost: &mut [u32; LANES],
-    ) {
-        let (mut nodes, mut prims) = (LaneCounter::default(), LaneCounter::default());
-        let HitPacket { t, prim } = hit;
-        if self.bvh.is_empty() {
-            prims.add(rays.active, self.plane_base() as u32);
-            self.closest_in_packet(self.bounded_range(), rays, t, prim);
-        } else {
-            let leaf = |range: Range<u32>, rays: &RayPacket, t: &mut F32x8| {
-                prims.add(rays.active, range.len() as u32);
-                self.closest_in_packet(range, rays, t, prim);
-            };
-            self.bvh.closest_packet_probed(rays, t, leaf, &mut nodes);
-        }
-        prims.add(rays.active, self.planes.len() as u32);
-        self.closest_in_packet(self.planes_range(), rays, t, prim);
-        for (lane, c) in cost.iter_mut().enumerate() {
-            *c += nodes.0[lane] + prims.0[lane];
-        }
-    }
-
-    /// True if anything lies on the ray in `(tmin, tmax)`.
-    pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let leaf = |range: Range<u32>| self.occluded_in(range, ray, tmin, tmax);
-        let bounded = if self.bvh.is_empty() {
-            leaf(self.bounded_range())
-        } else {
-            self.bvh.occluded(ray, tmin, tmax, leaf)
-        };
-        bounded || leaf(self.planes_range())
-    }
-
-    /// The active lanes with something in `(tmin, tmax)`; stops as soon as every active lane is
-    /// occluded.
-    pub fn occluded_packet(&self, rays: &RayPacket, tmax: F32x8) -> Mask {
-        let leaf = |range: Range<u32>, rays: &RayPacket| self.occluded_in_packet(range, rays, tmax);
-        let mut occluded = if self.bvh.is_empty() {
-            leaf(self.bounded_range(), rays)
-        } else {
-            self.bvh.occluded_packet(rays, tmax, leaf)
-        };
-        let rest = !occluded & rays.active;
-        if any(rest) && !self.planes.is_empty() {
-            occluded |= leaf(
-                self.planes_range(),
-                &RayPacket {
-                    active: rest,
-                    ..*rays
-                },
-            );
-        }
-        occluded
-    }
-
-    /// Calls `f(kind, index range in that kind's array, geometry index of the first)` for each
-    /// kind present in the geometry-index `range`.
-    #[inline(always)]
-    fn for_kinds(&self, range: Range<u32>, mut f: impl FnMut(PrimKind, Range<usize>, usize)) {
-        let bases = [
-            (PrimKind::Triangle, 0, self.sphere_base()),
-            (
-                PrimKind::Sphere,
-                self.sphere_base(),
-                self.transformed_base(),
-            ),
-            (
-                PrimKind::TransformedSphere,
-                self.transformed_base(),
-                self.plane_base(),
-            ),
-            (PrimKind::Plane, self.plane_base(), self.len()),
-        ];
-        let (lo, hi) = (range.start as usize, range.end as usize);
-        for (kind, start, end) in bases {
-            let (a, b) = (lo.max(start), hi.min(end));
-            if a < b {
-                f(kind, a - start..b - start, start);
-            }
-        }
-    }
-
-    /// Brute-force closest hit over a range of geometry indices.
-    fn closest_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
-        let mut best = None;
-        let mut limit = tmax;
-        self.for_kinds(range, |kind, idx, base| {
-            for i in idx {
-                let t = match kind {
-                    PrimKind::Triangle => {
-                        let (v0, e1, e2) = self.triangles.get(i);
-                        intersect_triangle(v0, e1, e2, ray, tmin, limit)
-                    }
-                    PrimKind::Sphere => {
-                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
-                        intersect_sphere(c, r2, ray, tmin, limit)
-                    }
-                    PrimKind::TransformedSphere => {
-                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, limit)
-                    }
-                    PrimKind::Plane => {
-                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-                        intersect_plane(n, d, ray, tmin, limit)
-                    }
-                };
-                if let Some(t) = t {
-                    limit = t;
-                    best = Some((t, (base + i) as u32));
-                }
-            }
-        });
-        best
-    }
-
-    /// Brute-force closest hits of a packet over a range of geometry indices.
-    #[inline(always)]
-    fn closest_in_packet(
-        &self,
-        range: Range<u32>,
-        rays: &RayPacket,
-        t: &mut F32x8,
-        prim: &mut I32x8,
-    ) {
-        self.for_kinds(range, |kind, idx, base| {
-            for i in idx {
-                let (m, ti) = match kind {
-                    PrimKind::Triangle => {
-                        let (v0, e1, e2) = self.triangles.get(i);
-                        intersect_triangle_packet(v0, e1, e2, rays, *t)
-                    }
-                    PrimKind::Sphere => {
-                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
-                        intersect_sphere_packet(c, r2, rays, *t)
-                    }
-                    PrimKind::TransformedSphere => {
-                        intersect_transformed_sphere_packet(&self.transformed.inverse(i), rays, *t)
-                    }
-                    PrimKind::Plane => {
-                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-                        intersect_plane_packet(n, d, rays, *t)
-                    }
-                };
-                *t = select(m, ti, *t);
-                *prim = select_i32(m, I32x8::splat((base + i) as i32), *prim);
-            }
-        });
-    }
-
-    /// Brute-force any hit over a range of geometry indices.
-    fn occluded_in(&self, range: Range<u32>, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let mut hit = false;
-        self.for_kinds(range, |kind, mut idx, _| {
-            hit = hit
-                || match kind {
-                    PrimKind::Triangle => idx.any(|i| {
-                        let (v0, e1, e2) = self.triangles.get(i);
-                        intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
-                    }),
-                    PrimKind::Sphere => idx.any(|i| {
-                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
-                        intersect_sphere(c, r2, ray, tmin, tmax).is_some()
-                    }),
-                    PrimKind::TransformedSphere => idx.any(|i| {
-                        intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax)
-                            .is_some()
-                    }),
-                    PrimKind::Plane => idx.any(|i| {
-                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-                        intersect_plane(n, d, ray, tmin, tmax).is_some()
-                    }),
-                };
-        });
-        hit
-    }
-
-    /// Brute-force any hit of a packet over a range of geometry indices; stops once every
-    /// active lane is blocked.
-    #[inline(always)]
-    fn occluded_in_packet(&self, range: Range<u32>, rays: &RayPacket, tmax: F32x8) -> Mask {
-        let mut occluded = mask_none();
-        self.for_kinds(range, |kind, idx, _| {
-            for i in idx {
-                if all(occluded | !rays.active) {
-                    return;
-                }
-                occluded |= match kind {
-                    PrimKind::Triangle => {
-                        let (v0, e1, e2) = self.triangles.get(i);
-                        intersect_triangle_packet(v0, e1, e2, rays, tmax).0
-                    }
-                    PrimKind::Sphere => {
-                        let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
-                        intersect_sphere_packet(c, r2, rays, tmax).0
-                    }
-                    PrimKind::TransformedSphere => {
-                        intersect_transformed_sphere_packet(
-                            &self.transformed.inverse(i),
-                            rays,
-                            tmax,
-                        )
-                        .0
-                    }
-                    PrimKind::Plane => {
-                        let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-                        intersect_plane_packet(n, d, rays, tmax).0
-                    }
-                };
-            }
-        });
-        occluded
-    }
-}
-
-/// Counts per lane, for the heatmap: the BVH's probe (one per node a lane enters) and the
-/// primitive tests of the leaves a lane reaches.
-#[derive(Default)]
-struct LaneCounter([u32; LANES]);
-
-impl LaneCounter {
-    fn add(&mut self, lanes: Mask, n: u32) {
-        let bits = bitmask(lanes);
-        for (lane, c) in self.0.iter_mut().enumerate() {
-            if bits >> lane & 1 == 1 {
-                *c += n;
-            }
-        }
-    }
-}
-
-impl TraversalProbe for LaneCounter {
-    fn node(&mut self, lanes: Mask) {
-        self.add(lanes, 1);
+    /// The BVH's leaf blocks.
+    pub fn blocks(&self) -> &Blocks {
+        &self.blocks
     }
 }
 

@@ -5,7 +5,7 @@
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, ge, gt, lt, select, sqrt};
+use crate::simd::{F32x8, Mask, Simd, Vec3v, Vec3x8, gt, lt, select};
 
 /// The nearer root of the ray-sphere quadratic inside `(tmin, tmax)`, else the farther one.
 #[inline]
@@ -39,6 +39,26 @@ pub fn intersect_sphere(
     }
 }
 
+/// The arithmetic of [`intersect_sphere`] for any lane width (8 rays against one sphere, or one
+/// ray against a leaf block of 4 spheres): the lanes with real roots and the two roots
+/// `t0 <= t1`, the same bits as the scalar kernel computes.
+#[inline(always)]
+pub fn sphere_lanes<T: Simd>(
+    center: Vec3v<T>,
+    radius2: T,
+    origin: Vec3v<T>,
+    dir: Vec3v<T>,
+) -> (T, T, T) {
+    let oc = origin - center;
+    let a = dir.dot(dir);
+    let mid = -oc.dot(dir) / a;
+    let perp = oc + dir * mid;
+    let disc = radius2 - perp.dot(perp);
+    let real = disc.ge(T::splat(0.0));
+    let half = (disc / a).sqrt_lanes();
+    (real, mid - half, mid + half)
+}
+
 /// [`intersect_sphere`] for the active lanes of a packet: the lanes that hit inside
 /// `(rays.tmin, tmax)` and their `t`. Inactive lanes are never reported.
 #[inline(always)]
@@ -48,18 +68,15 @@ pub fn intersect_sphere_packet(
     rays: &RayPacket,
     tmax: F32x8,
 ) -> (Mask, F32x8) {
-    let oc = rays.origin - Vec3x8::splat(center);
-    let a = rays.dir.dot(rays.dir);
-    let mid = -oc.dot(rays.dir) / a;
-    let perp = oc + rays.dir * mid;
-    let disc = F32x8::splat(radius2) - perp.dot(perp);
-    let real = ge(disc, F32x8::splat(0.0)) & rays.active;
-    let half = sqrt(disc / a);
-    let t0 = mid - half;
-    let t1 = mid + half;
+    let (real, t0, t1) = sphere_lanes(
+        Vec3x8::splat(center),
+        F32x8::splat(radius2),
+        rays.origin,
+        rays.dir,
+    );
     let hit0 = gt(t0, rays.tmin) & lt(t0, tmax);
     let hit1 = gt(t1, rays.tmin) & lt(t1, tmax);
-    (real & (hit0 | hit1), select(hit0, t0, t1))
+    (real & rays.active & (hit0 | hit1), select(hit0, t0, t1))
 }
 
 /// Applies the 3x4 row-major affine `m` to a point.

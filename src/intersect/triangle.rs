@@ -4,7 +4,7 @@
 
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, eq, ge, gt, le, lt, select};
+use crate::simd::{F32x8, Mask, Simd, Vec3v, Vec3x8, gt, lt};
 
 /// The `t` where the ray crosses the triangle `(v0, v0 + e1, v0 + e2)`, if inside
 /// `(tmin, tmax)`. Both sides count; rays in the triangle's plane miss.
@@ -39,6 +39,33 @@ pub fn intersect_triangle(
     (t > tmin && t < tmax).then_some(t)
 }
 
+/// The arithmetic of [`intersect_triangle`] for any lane width, written once so that every
+/// caller computes the same bits: 8 rays against one triangle ([`intersect_triangle_packet`],
+/// triangle splatted) or one ray against a leaf block of 4 triangles (ray splatted). `ng` is
+/// `e1 x e2` (callers compute it where it is cheapest: once per triangle, or per lane). Returns
+/// the lanes where the ray crosses the triangle's interior and their `t` (meaningless elsewhere).
+#[inline(always)]
+pub fn triangle_lanes<T: Simd>(
+    v0: Vec3v<T>,
+    e1: Vec3v<T>,
+    e2: Vec3v<T>,
+    ng: Vec3v<T>,
+    origin: Vec3v<T>,
+    dir: Vec3v<T>,
+) -> (T, T) {
+    let zero = T::splat(0.0);
+    let s = origin - v0;
+    let r = s.cross(dir);
+    let det = -dir.dot(ng);
+    let sign = T::pick(det.lt(zero), T::splat(-1.0), T::splat(1.0));
+    let abs_det = det.abs_lanes();
+    let u = r.dot(e2) * sign;
+    let v = -r.dot(e1) * sign;
+    let t = s.dot(ng) * sign;
+    let inside = !det.eq(zero) & u.ge(zero) & v.ge(zero) & (u + v).le(abs_det);
+    (inside, t / abs_det)
+}
+
 /// [`intersect_triangle`] for the active lanes of a packet.
 #[inline(always)]
 pub fn intersect_triangle_packet(
@@ -48,18 +75,14 @@ pub fn intersect_triangle_packet(
     rays: &RayPacket,
     tmax: F32x8,
 ) -> (Mask, F32x8) {
-    let zero = F32x8::splat(0.0);
-    let ng = Vec3x8::splat(e1.cross(e2));
-    let s = rays.origin - Vec3x8::splat(v0);
-    let r = s.cross(rays.dir);
-    let det = -rays.dir.dot(ng);
-    let sign = select(lt(det, zero), F32x8::splat(-1.0), F32x8::splat(1.0));
-    let abs_det = det.abs();
-    let u = r.dot(Vec3x8::splat(e2)) * sign;
-    let v = -r.dot(Vec3x8::splat(e1)) * sign;
-    let t = s.dot(ng) * sign;
-    let inside = !eq(det, zero) & ge(u, zero) & ge(v, zero) & le(u + v, abs_det);
-    let t = t / abs_det;
+    let (inside, t) = triangle_lanes(
+        Vec3x8::splat(v0),
+        Vec3x8::splat(e1),
+        Vec3x8::splat(e2),
+        Vec3x8::splat(e1.cross(e2)),
+        rays.origin,
+        rays.dir,
+    );
     (inside & gt(t, rays.tmin) & lt(t, tmax) & rays.active, t)
 }
 

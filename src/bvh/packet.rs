@@ -1,0 +1,365 @@
+//! Packet traversal of the 8-wide BVH: 8 rays together, one child at a time against all 8
+//! lanes (per-lane entry distances, lanes culled where they cannot beat their current hit).
+//! When the packet's rays share an octant, a frustum of them first tests all 8 children in one
+//! pass (interval arithmetic over the packet's origins and reciprocal directions), so only
+//! children some ray may enter get the per-lane test; children go nearest first by that bound.
+
+use super::stack::Stack;
+use super::{
+    Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, TraversalProbe, WIDTH, safe_inverse,
+    widen8,
+};
+use crate::packet::RayPacket;
+use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, ge, lanes, le, max, min, select};
+
+/// Entries a packet stack may hold.
+pub const PACKET_STACK_DEPTH: usize = (WIDTH - 1) * MAX_DEPTH + 1;
+
+/// A packet prepared for box tests: origins and safe reciprocal directions.
+#[derive(Clone, Copy)]
+pub(super) struct Packet8 {
+    pub org: Vec3x8,
+    pub inv: Vec3x8,
+}
+
+impl Packet8 {
+    #[inline(always)]
+    pub(super) fn new(rays: &RayPacket) -> Packet8 {
+        let safe = |d: F32x8| F32x8::new(lanes(d).map(safe_inverse));
+        Packet8 {
+            org: rays.origin,
+            inv: Vec3x8 {
+                x: safe(rays.dir.x),
+                y: safe(rays.dir.y),
+                z: safe(rays.dir.z),
+            },
+        }
+    }
+
+    /// Lanes whose ray meets child `i`'s box within `(tmin, tmax)`, and their entry distances
+    /// (the single-ray test's arithmetic, lane by lane).
+    #[inline(always)]
+    pub(super) fn test(&self, n: &Node8, i: usize, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
+        let plane = |k: usize| F32x8::splat(n.bounds[k].as_array()[i]);
+        let slab = |axis: usize, o: F32x8, inv: F32x8| {
+            let a = (plane(LO + axis) - o) * inv;
+            let b = (plane(HI + axis) - o) * inv;
+            (min(a, b), max(a, b))
+        };
+        let (x0, x1) = slab(0, self.org.x, self.inv.x);
+        let (y0, y1) = slab(1, self.org.y, self.inv.y);
+        let (z0, z1) = slab(2, self.org.z, self.inv.z);
+        let near = max(max(x0, y0), max(z0, tmin));
+        let far = widen8(min(min(x1, y1), min(z1, tmax)));
+        (le(near, far), near)
+    }
+}
+
+/// A conservative frustum around rays that share an octant: the range of their origins and
+/// reciprocal directions on each axis. Its box test bounds every ray's entry distance from
+/// below and exit distance from above with the rays' own arithmetic (rounding is monotonic), so
+/// a child it rejects is rejected by every ray's own test.
+#[derive(Clone, Copy)]
+pub(super) struct Frustum {
+    /// The plane each axis is entered through (all rays share it) and left through.
+    near: [usize; 3],
+    far: [usize; 3],
+    /// The origin bound that gives the smallest entry / largest exit difference.
+    o_near: [F32x8; 3],
+    o_far: [F32x8; 3],
+    inv_lo: [F32x8; 3],
+    inv_hi: [F32x8; 3],
+    tmin: F32x8,
+}
+
+impl Frustum {
+    /// The frustum of the `active` lanes of several prepared packets, or `None` when their
+    /// directions do not share an octant (or no lane is active).
+    pub(super) fn new<'a>(
+        packets: impl Iterator<Item = (&'a Packet8, Mask, F32x8)>,
+    ) -> Option<Frustum> {
+        let (inf, ninf) = (F32x8::splat(f32::INFINITY), F32x8::splat(f32::NEG_INFINITY));
+        let (mut o_lo, mut o_hi) = ([inf; 3], [ninf; 3]);
+        let (mut i_lo, mut i_hi) = ([inf; 3], [ninf; 3]);
+        let mut t_lo = inf;
+        let mut any_lane = false;
+        for (p, active, tmin) in packets {
+            any_lane |= any(active);
+            let o = [p.org.x, p.org.y, p.org.z];
+            let v = [p.inv.x, p.inv.y, p.inv.z];
+            for a in 0..3 {
+                o_lo[a] = min(o_lo[a], select(active, o[a], inf));
+                o_hi[a] = max(o_hi[a], select(active, o[a], ninf));
+                i_lo[a] = min(i_lo[a], select(active, v[a], inf));
+                i_hi[a] = max(i_hi[a], select(active, v[a], ninf));
+            }
+            t_lo = min(t_lo, select(active, tmin, inf));
+        }
+        if !any_lane {
+            return None;
+        }
+        let reduce = |v: F32x8, f: fn(f32, f32) -> f32| lanes(v).into_iter().reduce(f).unwrap();
+        let mut near = [0; 3];
+        let (mut o_near, mut o_far) = ([inf; 3], [inf; 3]);
+        let (mut inv_lo, mut inv_hi) = ([inf; 3], [inf; 3]);
+        for a in 0..3 {
+            let (ilo, ihi) = (reduce(i_lo[a], f32::min), reduce(i_hi[a], f32::max));
+            let (olo, ohi) = (reduce(o_lo[a], f32::min), reduce(o_hi[a], f32::max));
+            let positive = ilo >= 0.0;
+            if !positive && ihi >= 0.0 {
+                return None;
+            }
+            near[a] = if positive { LO + a } else { HI + a };
+            // Entry: the smallest (plane - origin) for rays going up the axis is from the
+            // largest origin; going down, from the smallest. Exit: the opposite.
+            o_near[a] = F32x8::splat(if positive { ohi } else { olo });
+            o_far[a] = F32x8::splat(if positive { olo } else { ohi });
+            inv_lo[a] = F32x8::splat(ilo);
+            inv_hi[a] = F32x8::splat(ihi);
+        }
+        Some(Frustum {
+            near,
+            far: near.map(|k| if k >= HI { k - HI } else { k + HI }),
+            o_near,
+            o_far,
+            inv_lo,
+            inv_hi,
+            tmin: F32x8::splat(reduce(t_lo, f32::min)),
+        })
+    }
+
+    /// The children some ray of the frustum may enter before `tmax` (the largest of the rays'
+    /// limits), and a lower bound of their entry distances.
+    #[inline(always)]
+    pub(super) fn test(&self, n: &Node8, tmax: F32x8) -> (u32, F32x8) {
+        let zero = F32x8::splat(0.0);
+        let entry = |a: usize| {
+            let d = n.bounds[self.near[a]] - self.o_near[a];
+            d * select(ge(d, zero), self.inv_lo[a], self.inv_hi[a])
+        };
+        let exit = |a: usize| {
+            let d = n.bounds[self.far[a]] - self.o_far[a];
+            d * select(ge(d, zero), self.inv_hi[a], self.inv_lo[a])
+        };
+        let near = max(max(entry(0), entry(1)), max(entry(2), self.tmin));
+        let far = min(min(exit(0), exit(1)), min(exit(2), tmax));
+        (bitmask(le(near, widen8(far))), near)
+    }
+}
+
+/// The largest `tmax` among the `lanes`.
+#[inline(always)]
+pub(super) fn max_lane(t: F32x8, lanes_mask: Mask) -> F32x8 {
+    let v = lanes(select(lanes_mask, t, F32x8::splat(f32::NEG_INFINITY)));
+    F32x8::splat(v.into_iter().fold(f32::NEG_INFINITY, f32::max))
+}
+
+/// A pending subtree of a packet traversal: its lanes and their entry distances.
+#[derive(Clone, Copy)]
+struct Pending {
+    node: NodeRef,
+    lanes: Mask,
+    near: F32x8,
+}
+
+/// A hit child while a node is processed: slot, lanes, their entry distances, sort key.
+#[derive(Clone, Copy)]
+struct HitChild {
+    node: NodeRef,
+    lanes: Mask,
+    near: F32x8,
+    key: f32,
+}
+
+/// The children of `n` that `lanes` of `p` enter, ordered nearest last (by the frustum's
+/// bound when there is one, else by the nearest lane).
+#[inline(always)]
+fn hit_children(
+    n: &Node8,
+    p: &Packet8,
+    frustum: Option<&Frustum>,
+    rays: &RayPacket,
+    lanes_mask: Mask,
+    tmax: F32x8,
+    out: &mut [HitChild; WIDTH],
+) -> usize {
+    let (mut cand, fnear) = match frustum {
+        Some(f) => f.test(n, max_lane(tmax, lanes_mask)),
+        None => ((1u32 << n.len()) - 1, F32x8::splat(0.0)),
+    };
+    let fnear = lanes(fnear);
+    let mut count = 0;
+    while cand != 0 {
+        let i = cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let (hit, near) = p.test(n, i, rays.tmin, tmax);
+        let hit = hit & lanes_mask;
+        if !any(hit) {
+            continue;
+        }
+        let key = if frustum.is_some() {
+            fnear[i]
+        } else {
+            lanes(select(hit, near, F32x8::splat(f32::INFINITY)))
+                .into_iter()
+                .fold(f32::INFINITY, f32::min)
+        };
+        out[count] = HitChild {
+            node: n.child[i],
+            lanes: hit,
+            near,
+            key,
+        };
+        count += 1;
+    }
+    // farthest first, so the nearest ends last
+    for i in 1..count {
+        let x = out[i];
+        let mut j = i;
+        while j > 0 && out[j - 1].key <= x.key {
+            out[j] = out[j - 1];
+            j -= 1;
+        }
+        out[j] = x;
+    }
+    count
+}
+
+impl Bvh8 {
+    /// Visits, for the active lanes of `rays`, every leaf one of them may hit nearer than its
+    /// `tmax` lane; `leaf(leaf, rays, lanes, tmax)` tests the leaf's primitives for `lanes`
+    /// (a subset of the active ones) and lowers their `tmax` where it finds nearer hits.
+    pub fn closest_packet(
+        &self,
+        rays: &RayPacket,
+        tmax: &mut F32x8,
+        leaf: impl FnMut(Leaf, &RayPacket, Mask, &mut F32x8),
+    ) {
+        self.closest_packet_probed(rays, tmax, leaf, &mut NoProbe);
+    }
+
+    /// [`Bvh8::closest_packet`] reporting every node it visits to `probe`, with the lanes that
+    /// entered it (the cost heatmap counts them); with [`NoProbe`] it is `closest_packet`.
+    pub fn closest_packet_probed(
+        &self,
+        rays: &RayPacket,
+        tmax: &mut F32x8,
+        mut leaf: impl FnMut(Leaf, &RayPacket, Mask, &mut F32x8),
+        probe: &mut impl TraversalProbe,
+    ) {
+        if self.is_empty() || !any(rays.active) {
+            return;
+        }
+        if self.root.is_leaf() {
+            probe.node(rays.active);
+            leaf(self.root.as_leaf(), rays, rays.active, tmax);
+            return;
+        }
+        let p = Packet8::new(rays);
+        let frustum = Frustum::new(std::iter::once((&p, rays.active, rays.tmin)));
+        let mut stack: Stack<Pending, PACKET_STACK_DEPTH> = Stack::new();
+        stack.push(Pending {
+            node: self.root,
+            lanes: rays.active,
+            near: rays.tmin,
+        });
+        let mut hits = [HitChild {
+            node: NodeRef::EMPTY,
+            lanes: F32x8::splat(0.0),
+            near: F32x8::splat(0.0),
+            key: 0.0,
+        }; WIDTH];
+        while let Some(e) = stack.pop() {
+            // cull: no lane of this subtree can hit nearer than its current hit
+            let mut lanes_mask = e.lanes & le(e.near, widen8(*tmax));
+            if !any(lanes_mask) {
+                continue;
+            }
+            let mut node = e.node;
+            loop {
+                probe.node(lanes_mask);
+                if node.is_leaf() {
+                    leaf(node.as_leaf(), rays, lanes_mask, tmax);
+                    break;
+                }
+                let n = &self.nodes[node.index()];
+                let count =
+                    hit_children(n, &p, frustum.as_ref(), rays, lanes_mask, *tmax, &mut hits);
+                if count == 0 {
+                    break;
+                }
+                for h in &hits[..count - 1] {
+                    stack.push(Pending {
+                        node: h.node,
+                        lanes: h.lanes,
+                        near: h.near,
+                    });
+                }
+                let nearest = hits[count - 1];
+                (node, lanes_mask) = (nearest.node, nearest.lanes);
+            }
+        }
+    }
+
+    /// The active lanes of `rays` that something blocks before their `tmax`: visits leaves
+    /// until every active lane is occluded; `leaf(leaf, rays, lanes)` returns the lanes (of
+    /// `lanes`) blocked by the leaf's primitives.
+    pub fn occluded_packet(
+        &self,
+        rays: &RayPacket,
+        tmax: F32x8,
+        mut leaf: impl FnMut(Leaf, &RayPacket, Mask) -> Mask,
+    ) -> Mask {
+        let mut occluded = crate::simd::mask_none();
+        if self.is_empty() || !any(rays.active) {
+            return occluded;
+        }
+        if self.root.is_leaf() {
+            return leaf(self.root.as_leaf(), rays, rays.active) & rays.active;
+        }
+        let p = Packet8::new(rays);
+        let frustum = Frustum::new(std::iter::once((&p, rays.active, rays.tmin)));
+        let tmax_all = max_lane(tmax, rays.active);
+        let mut stack: Stack<(NodeRef, Mask), PACKET_STACK_DEPTH> = Stack::new();
+        stack.push((self.root, rays.active));
+        while let Some((mut node, lanes_mask)) = stack.pop() {
+            let mut lanes_mask = lanes_mask & !occluded;
+            if !any(lanes_mask) {
+                continue;
+            }
+            loop {
+                if node.is_leaf() {
+                    occluded |= leaf(node.as_leaf(), rays, lanes_mask) & lanes_mask;
+                    // early exit: every active lane is blocked
+                    if all(occluded | !rays.active) {
+                        return occluded;
+                    }
+                    break;
+                }
+                let n = &self.nodes[node.index()];
+                let mut cand = match &frustum {
+                    Some(f) => f.test(n, tmax_all).0,
+                    None => (1u32 << n.len()) - 1,
+                };
+                // highest slot first, so the first (largest) child is visited first
+                let mut next: Option<(NodeRef, Mask)> = None;
+                while cand != 0 {
+                    let i = 31 - cand.leading_zeros() as usize;
+                    cand &= !(1 << i);
+                    let (hit, _) = p.test(n, i, rays.tmin, tmax);
+                    let hit = hit & lanes_mask;
+                    if any(hit) {
+                        if let Some(prev) = next.replace((n.child[i], hit)) {
+                            stack.push(prev);
+                        }
+                    }
+                }
+                match next {
+                    Some((c, l)) => (node, lanes_mask) = (c, l),
+                    None => break,
+                }
+            }
+        }
+        occluded
+    }
+}

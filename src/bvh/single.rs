@@ -1,0 +1,178 @@
+//! Single-ray traversal of the 8-wide BVH, for incoherent rays: one 8-lane pass tests all of a
+//! node's children against the ray (box planes chosen by the ray's octant, so no per-axis
+//! min/max), hit children are visited nearest first (closest hit) or in slot order (any hit).
+
+use super::stack::Stack;
+use super::{Bvh8, HI, LO, Leaf, MAX_DEPTH, Node8, NodeRef, WIDTH, safe_inverse, widen, widen8};
+use crate::math::Ray;
+use crate::simd::{F32x8, bitmask, le, max, min};
+
+/// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
+/// than it pops.
+const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
+
+/// One ray prepared for 8-wide box tests: splatted origin and reciprocal direction, and the
+/// box planes it enters (`near`) and leaves (`far`) through on each axis.
+pub(super) struct Ray1 {
+    org: [F32x8; 3],
+    inv: [F32x8; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+impl Ray1 {
+    #[inline(always)]
+    pub(super) fn new(ray: &Ray) -> Ray1 {
+        Ray1::from_parts(ray.origin.to_array(), ray.dir.to_array().map(safe_inverse))
+    }
+
+    /// From an origin and the safe reciprocal direction ([`safe_inverse`]).
+    #[inline(always)]
+    pub(super) fn from_parts(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
+        let near: [usize; 3] = std::array::from_fn(|a| if inv[a] >= 0.0 { LO + a } else { HI + a });
+        Ray1 {
+            org: o.map(F32x8::splat),
+            inv: inv.map(F32x8::splat),
+            near,
+            far: near.map(|k| if k >= HI { k - HI } else { k + HI }),
+        }
+    }
+
+    /// The children the ray enters within `(tmin, tmax)` (bit `i` = child `i`) and their entry
+    /// distances. `(plane - origin) * inv`, not a fused `plane * inv - origin * inv`, keeps the
+    /// error relative to the distance itself, which the widening of the exit distance covers.
+    #[inline(always)]
+    pub(super) fn test(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> (u32, F32x8) {
+        let t = |plane: usize, axis: usize| (n.bounds[plane] - self.org[axis]) * self.inv[axis];
+        let near = max(
+            max(t(self.near[0], 0), t(self.near[1], 1)),
+            max(t(self.near[2], 2), tmin),
+        );
+        let far = min(
+            min(t(self.far[0], 0), t(self.far[1], 1)),
+            min(t(self.far[2], 2), tmax),
+        );
+        (bitmask(le(near, widen8(far))), near)
+    }
+}
+
+impl Bvh8 {
+    /// The closest hit of one ray: visits every leaf the ray may hit nearer than `tmax`,
+    /// nearest child first; `leaf(leaf, tmax)` tests the leaf's primitives and lowers `tmax`
+    /// where it finds a nearer hit.
+    pub fn closest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: &mut f32,
+        mut leaf: impl FnMut(Leaf, &mut f32),
+    ) {
+        if self.root.is_leaf() {
+            if !self.root.is_empty() {
+                leaf(self.root.as_leaf(), tmax);
+            }
+            return;
+        }
+        let r = Ray1::new(ray);
+        let tmin8 = F32x8::splat(tmin);
+        let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
+        let mut cur = self.root;
+        'traverse: loop {
+            while !cur.is_leaf() {
+                let n = &self.nodes[cur.index()];
+                let (mut mask, near) = r.test(n, tmin8, F32x8::splat(*tmax));
+                if mask == 0 {
+                    break;
+                }
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if mask == 0 {
+                    cur = n.child[i];
+                    continue;
+                }
+                // Two or more: push them all, sort the new entries farthest first, take the
+                // nearest back off the top.
+                let near = near.to_array();
+                let base = stack.len();
+                stack.push((n.child[i], near[i]));
+                while mask != 0 {
+                    let j = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    stack.push((n.child[j], near[j]));
+                }
+                sort_farthest_first(&mut stack.as_mut_slice()[base..]);
+                cur = stack.pop().map_or(NodeRef::EMPTY, |e| e.0);
+            }
+            if cur.is_leaf() && !cur.is_empty() {
+                leaf(cur.as_leaf(), tmax);
+            }
+            loop {
+                match stack.pop() {
+                    None => break 'traverse,
+                    Some((c, near)) if near <= widen(*tmax) => {
+                        cur = c;
+                        break;
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+    }
+
+    /// Single-ray any hit: true as soon as `leaf(leaf)` reports a blocker before `tmax`.
+    pub fn occluded(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
+        mut leaf: impl FnMut(Leaf) -> bool,
+    ) -> bool {
+        if self.root.is_leaf() {
+            return !self.root.is_empty() && leaf(self.root.as_leaf());
+        }
+        let r = Ray1::new(ray);
+        let (tmin8, tmax8) = (F32x8::splat(tmin), F32x8::splat(tmax));
+        let mut stack: Stack<NodeRef, STACK> = Stack::new();
+        let mut cur = self.root;
+        loop {
+            if cur.is_leaf() {
+                if leaf(cur.as_leaf()) {
+                    return true;
+                }
+            } else {
+                let n = &self.nodes[cur.index()];
+                let (mut mask, _) = r.test(n, tmin8, tmax8);
+                if mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    while mask != 0 {
+                        let j = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack.push(n.child[j]);
+                    }
+                    cur = n.child[i];
+                    continue;
+                }
+            }
+            match stack.pop() {
+                Some(c) => cur = c,
+                None => return false,
+            }
+        }
+    }
+}
+
+/// Insertion sort of a few stack entries by entry distance, largest first (ties keep slot
+/// order reversed, so the lower slot ends on top).
+#[inline(always)]
+fn sort_farthest_first(s: &mut [(NodeRef, f32)]) {
+    for i in 1..s.len() {
+        let x = s[i];
+        let mut j = i;
+        while j > 0 && s[j - 1].1 <= x.1 {
+            s[j] = s[j - 1];
+            j -= 1;
+        }
+        s[j] = x;
+    }
+}

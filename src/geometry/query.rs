@@ -1,0 +1,484 @@
+//! The geometry's ray queries: closest hit and any hit, for one ray (through the BVH one ray at
+//! a time, 8 children per pass, leaf blocks 4 primitives per pass), for an 8-ray packet, and
+//! for a stream of packets that share one frustum; plus [`Geometry::closest_hit_batch`] and
+//! [`Geometry::occluded_batch`], which pick among them per group of packets by how coherent the
+//! rays are (the rule the wavefront and `whitted bench` use). Planes are tested after the BVH.
+//!
+//! Every closest-hit query reports the nearest hit in `(tmin, tmax)`, ties in `t` going to the
+//! smaller geometry index, so single rays, packets and streams give the same `(t, prim)` bit for
+//! bit. Packet queries never touch inactive lanes.
+
+use super::blocks::{Best, transformed_packet};
+use super::{Geometry, PrimKind};
+use crate::bvh::MAX_STREAM;
+use crate::intersect::sphere::sphere_lanes;
+use crate::intersect::{
+    intersect_plane, intersect_plane_packet, intersect_transformed_sphere,
+    intersect_transformed_sphere_packet, intersect_triangle, intersect_triangle_packet,
+};
+use crate::math::{Ray, Vec3};
+use crate::packet::{HitPacket, RayPacket};
+use crate::simd::{
+    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, all, any, bitmask, gt, lanes, lt,
+    mask_none, select, select_i32,
+};
+
+/// How a group of packets is traced (see [`Geometry::closest_hit_batch`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Path {
+    /// Packets of the group together, one frustum ([`Geometry::closest_hit_stream`]).
+    Stream,
+    /// Packet by packet ([`Geometry::closest_hit_packet`]).
+    Packet,
+    /// Ray by ray ([`Geometry::closest_hit`]).
+    Single,
+}
+
+/// The smallest cosine between a group's ray directions and their mean above which the group
+/// counts as coherent (camera rays of a tile: ~0.9999; shadow rays towards a point light from
+/// nearby points: above 0.99; diffuse rays: ~0.3). Measured: PERF.md, "Which path".
+pub const COHERENT_COS: f32 = 0.95;
+
+/// Which path suits `rays`: the stream when every active direction lies within the cone
+/// [`COHERENT_COS`] around their mean, otherwise single rays.
+pub fn choose_path(rays: &[RayPacket]) -> Path {
+    let mut sum = Vec3x8::zero();
+    let mut n = 0;
+    for r in rays {
+        let d = Vec3x8::select(r.active, r.dir, Vec3x8::zero());
+        sum = sum + d;
+        n += bitmask(r.active).count_ones();
+    }
+    if n == 0 {
+        return Path::Packet;
+    }
+    let mean = Vec3::new(
+        lanes(sum.x).iter().sum(),
+        lanes(sum.y).iter().sum(),
+        lanes(sum.z).iter().sum(),
+    )
+    .normalize_or_zero();
+    let m = Vec3x8::splat(mean);
+    let lim = F32x8::splat(COHERENT_COS);
+    let coherent = rays.iter().all(|r| {
+        let cos = r.dir.dot(m) * (F32x8::splat(1.0) / r.dir.length_squared().sqrt());
+        all(!r.active | crate::simd::ge(cos, lim))
+    });
+    if coherent { Path::Stream } else { Path::Single }
+}
+
+impl Geometry {
+    fn planes_range(&self) -> std::ops::Range<usize> {
+        0..self.planes.len()
+    }
+
+    /// The closest hit of one ray in `(tmin, tmax)`: `(t, geometry index)`.
+    pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
+        let mut best = Best { t: tmax, prim: -1 };
+        if self.bvh.is_empty() {
+            self.closest_brute(ray, tmin, &mut best);
+        } else {
+            let mut limit = tmax;
+            self.bvh.closest(ray, tmin, &mut limit, |leaf, limit| {
+                self.closest_leaf(leaf, ray, tmin, &mut best);
+                *limit = best.t;
+            });
+        }
+        let base = self.base(PrimKind::Plane) as i32;
+        for i in self.planes_range() {
+            let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+            if let Some(t) = intersect_plane(n, d, ray, tmin, f32::INFINITY) {
+                best.take(t, base + i as i32);
+            }
+        }
+        (best.prim >= 0).then(|| (best.t, best.prim as u32))
+    }
+
+    /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
+    /// are left untouched.
+    pub fn closest_hit_packet(&self, rays: &RayPacket, hit: &mut HitPacket) {
+        let HitPacket { t, prim } = hit;
+        if self.bvh.is_empty() {
+            self.closest_brute_packet(rays, t, prim);
+        } else {
+            self.bvh.closest_packet(rays, t, |leaf, rays, lanes, t| {
+                self.closest_leaf_packet(leaf, rays, lanes, t, prim)
+            });
+        }
+        self.closest_planes_packet(rays, t, prim);
+    }
+
+    /// [`Geometry::closest_hit_packet`] that also adds to `cost` each lane's traversal work:
+    /// BVH nodes it entered plus primitives tested for it (planes included). The heatmap's
+    /// counter; the same packet traversal, in the same order, as [`Geometry::closest_hit_packet`].
+    pub fn closest_hit_packet_counted(
+        &self,
+        rays: &RayPacket,
+        hit: &mut HitPacket,
+        cost: &mut [u32; LANES],
+    ) {
+        let (mut nodes, mut prims) = (LaneCounter::default(), LaneCounter::default());
+        let HitPacket { t, prim } = hit;
+        if self.bvh.is_empty() {
+            prims.add(rays.active, self.base(PrimKind::Plane) as u32);
+            self.closest_brute_packet(rays, t, prim);
+        } else {
+            let leaf = |leaf: crate::bvh::Leaf, rays: &RayPacket, lanes: Mask, t: &mut F32x8| {
+                prims.add(lanes, leaf.count);
+                self.closest_leaf_packet(leaf, rays, lanes, t, prim);
+            };
+            self.bvh.closest_packet_probed(rays, t, leaf, &mut nodes);
+        }
+        prims.add(rays.active, self.planes.len() as u32);
+        self.closest_planes_packet(rays, t, prim);
+        for (lane, c) in cost.iter_mut().enumerate() {
+            *c += nodes.0[lane] + prims.0[lane];
+        }
+    }
+
+    /// [`Geometry::closest_hit_packet`] for a stream of at most [`MAX_STREAM`] packets traced
+    /// together (coherent rays: camera rays, shadow rays towards a point light).
+    pub fn closest_hit_stream(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        assert!(rays.len() <= MAX_STREAM && hits.len() == rays.len());
+        if self.bvh.is_empty() {
+            for (r, h) in rays.iter().zip(hits) {
+                self.closest_hit_packet(r, h);
+            }
+            return;
+        }
+        let mut t = [F32x8::splat(0.0); MAX_STREAM];
+        let mut prim = [I32x8::splat(0); MAX_STREAM];
+        for (k, h) in hits.iter().enumerate() {
+            (t[k], prim[k]) = (h.t, h.prim);
+        }
+        let n = rays.len();
+        self.bvh
+            .closest_stream(rays, &mut t[..n], |leaf, p, rays, lanes, t| {
+                self.closest_leaf_packet(leaf, rays, lanes, t, &mut prim[p])
+            });
+        for (k, (r, h)) in rays.iter().zip(hits).enumerate() {
+            (h.t, h.prim) = (t[k], prim[k]);
+            self.closest_planes_packet(r, &mut h.t, &mut h.prim);
+        }
+    }
+
+    /// Closest hits of any number of packets, each group of [`MAX_STREAM`] traced by the path
+    /// [`choose_path`] picks for it.
+    pub fn closest_hit_batch(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        for (r, h) in rays.chunks(MAX_STREAM).zip(hits.chunks_mut(MAX_STREAM)) {
+            self.closest_hit_path(choose_path(r), r, h);
+        }
+    }
+
+    /// Closest hits of up to [`MAX_STREAM`] packets by the given path.
+    pub fn closest_hit_path(&self, path: Path, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        match path {
+            Path::Stream => self.closest_hit_stream(rays, hits),
+            Path::Packet => {
+                for (r, h) in rays.iter().zip(hits) {
+                    self.closest_hit_packet(r, h);
+                }
+            }
+            Path::Single => {
+                for (r, h) in rays.iter().zip(hits) {
+                    let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+                    let tmin = lanes(r.tmin);
+                    let active = bitmask(r.active);
+                    for l in 0..LANES {
+                        if active >> l & 1 == 1 {
+                            if let Some((tt, p)) = self.closest_hit(&r.ray(l), tmin[l], t[l]) {
+                                (t[l], prim[l]) = (tt, p as i32);
+                            }
+                        }
+                    }
+                    (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
+                }
+            }
+        }
+    }
+
+    /// True if anything lies on the ray in `(tmin, tmax)`.
+    pub fn occluded(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        let bounded = if self.bvh.is_empty() {
+            self.occluded_brute(ray, tmin, tmax)
+        } else {
+            self.bvh.occluded(ray, tmin, tmax, |leaf| {
+                self.occluded_leaf(leaf, ray, tmin, tmax)
+            })
+        };
+        bounded
+            || self.planes_range().any(|i| {
+                let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+                intersect_plane(n, d, ray, tmin, tmax).is_some()
+            })
+    }
+
+    /// The active lanes with something in `(tmin, tmax)`; stops as soon as every active lane is
+    /// occluded.
+    pub fn occluded_packet(&self, rays: &RayPacket, tmax: F32x8) -> Mask {
+        let occluded = if self.bvh.is_empty() {
+            self.occluded_brute_packet(rays, tmax)
+        } else {
+            self.bvh.occluded_packet(rays, tmax, |leaf, rays, lanes| {
+                self.occluded_leaf_packet(leaf, rays, lanes, tmax)
+            })
+        };
+        occluded | self.occluded_planes_packet(rays, !occluded & rays.active, tmax)
+    }
+
+    /// [`Geometry::occluded_packet`] for a stream of at most [`MAX_STREAM`] packets traced
+    /// together: `occluded[p]` gets packet `p`'s blocked lanes.
+    pub fn occluded_stream(&self, rays: &[RayPacket], tmax: &[F32x8], occluded: &mut [Mask]) {
+        assert!(rays.len() <= MAX_STREAM && tmax.len() == rays.len());
+        if self.bvh.is_empty() {
+            for ((r, t), o) in rays.iter().zip(tmax).zip(occluded) {
+                *o = self.occluded_packet(r, *t);
+            }
+            return;
+        }
+        self.bvh
+            .occluded_stream(rays, tmax, occluded, |leaf, p, rays, lanes| {
+                self.occluded_leaf_packet(leaf, rays, lanes, tmax[p])
+            });
+        for ((r, t), o) in rays.iter().zip(tmax).zip(occluded) {
+            *o |= self.occluded_planes_packet(r, !*o & r.active, *t);
+        }
+    }
+
+    /// Occlusion of any number of packets, each group of [`MAX_STREAM`] traced by the path
+    /// [`choose_path`] picks for it.
+    pub fn occluded_batch(&self, rays: &[RayPacket], tmax: &[F32x8], occluded: &mut [Mask]) {
+        let groups = rays
+            .chunks(MAX_STREAM)
+            .zip(tmax.chunks(MAX_STREAM))
+            .zip(occluded.chunks_mut(MAX_STREAM));
+        for ((r, t), o) in groups {
+            self.occluded_path(choose_path(r), r, t, o);
+        }
+    }
+
+    /// Occlusion of up to [`MAX_STREAM`] packets by the given path.
+    pub fn occluded_path(&self, path: Path, rays: &[RayPacket], tmax: &[F32x8], out: &mut [Mask]) {
+        match path {
+            Path::Stream => self.occluded_stream(rays, tmax, out),
+            Path::Packet => {
+                for ((r, t), o) in rays.iter().zip(tmax).zip(out) {
+                    *o = self.occluded_packet(r, *t);
+                }
+            }
+            Path::Single => {
+                for ((r, t), o) in rays.iter().zip(tmax).zip(out) {
+                    let (tmin, tmax, active) = (lanes(r.tmin), lanes(*t), bitmask(r.active));
+                    let mut bits = 0;
+                    for l in 0..LANES {
+                        if active >> l & 1 == 1 && self.occluded(&r.ray(l), tmin[l], tmax[l]) {
+                            bits |= 1 << l;
+                        }
+                    }
+                    *o = crate::simd::mask_from_byte(bits);
+                }
+            }
+        }
+    }
+
+    /// Planes against the packet's active lanes, closest hit.
+    #[inline(always)]
+    fn closest_planes_packet(&self, rays: &RayPacket, t: &mut F32x8, prim: &mut I32x8) {
+        let base = self.base(PrimKind::Plane);
+        for i in self.planes_range() {
+            let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+            let (m, ti) = intersect_plane_packet(n, d, rays, F32x8::splat(f32::INFINITY));
+            take_packet(m, ti, (base + i) as i32, t, prim);
+        }
+    }
+
+    /// Planes against `lanes` of a packet, any hit.
+    #[inline(always)]
+    fn occluded_planes_packet(&self, rays: &RayPacket, lanes_mask: Mask, tmax: F32x8) -> Mask {
+        let mut occluded = mask_none();
+        if !any(lanes_mask) {
+            return occluded;
+        }
+        for i in self.planes_range() {
+            let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
+            occluded |= intersect_plane_packet(n, d, rays, tmax).0;
+        }
+        occluded & lanes_mask
+    }
+
+    /// Brute-force closest hit over every bounded primitive (no BVH built).
+    fn closest_brute(&self, ray: &Ray, tmin: f32, best: &mut Best) {
+        for i in 0..self.triangles.len() {
+            let (v0, e1, e2) = self.triangles.get(i);
+            if let Some(t) = intersect_triangle(v0, e1, e2, ray, tmin, f32::INFINITY) {
+                best.take(t, i as i32);
+            }
+        }
+        let base = self.base(PrimKind::Sphere);
+        for i in 0..self.spheres.len() {
+            let (real, t0, t1) = sphere_lanes(
+                Vec3x4::splat(self.spheres.center(i)),
+                F32x4::splat(self.spheres.radius2[i]),
+                Vec3x4::splat(ray.origin),
+                Vec3x4::splat(ray.dir),
+            );
+            take_roots(real, t0, t1, tmin, (base + i) as i32, best);
+        }
+        let base = self.base(PrimKind::TransformedSphere);
+        for i in 0..self.transformed.len() {
+            let inv = self.transformed.inverse(i);
+            let o = crate::intersect::sphere::affine_point(&inv, ray.origin);
+            let d = crate::intersect::sphere::affine_vector(&inv, ray.dir);
+            let (real, t0, t1) = sphere_lanes(
+                Vec3x4::zero(),
+                F32x4::splat(1.0),
+                Vec3x4::splat(o),
+                Vec3x4::splat(d),
+            );
+            take_roots(real, t0, t1, tmin, (base + i) as i32, best);
+        }
+    }
+
+    /// Brute-force closest hits of a packet over every bounded primitive (no BVH built).
+    fn closest_brute_packet(&self, rays: &RayPacket, t: &mut F32x8, prim: &mut I32x8) {
+        let inf = F32x8::splat(f32::INFINITY);
+        for i in 0..self.triangles.len() {
+            let (v0, e1, e2) = self.triangles.get(i);
+            let (m, ti) = intersect_triangle_packet(v0, e1, e2, rays, inf);
+            take_packet(m, ti, i as i32, t, prim);
+        }
+        let base = self.base(PrimKind::Sphere);
+        for i in 0..self.spheres.len() {
+            let (real, t0, t1) = sphere_lanes(
+                Vec3x8::splat(self.spheres.center(i)),
+                F32x8::splat(self.spheres.radius2[i]),
+                rays.origin,
+                rays.dir,
+            );
+            take_roots_packet(
+                real & rays.active,
+                t0,
+                t1,
+                rays.tmin,
+                (base + i) as i32,
+                t,
+                prim,
+            );
+        }
+        let base = self.base(PrimKind::TransformedSphere);
+        for i in 0..self.transformed.len() {
+            let local = transformed_packet(&self.transformed.inverse(i), rays);
+            let (real, t0, t1) =
+                sphere_lanes(Vec3x8::zero(), F32x8::splat(1.0), local.origin, local.dir);
+            take_roots_packet(
+                real & rays.active,
+                t0,
+                t1,
+                rays.tmin,
+                (base + i) as i32,
+                t,
+                prim,
+            );
+        }
+    }
+
+    /// Brute-force any hit over every bounded primitive.
+    fn occluded_brute(&self, ray: &Ray, tmin: f32, tmax: f32) -> bool {
+        (0..self.triangles.len()).any(|i| {
+            let (v0, e1, e2) = self.triangles.get(i);
+            intersect_triangle(v0, e1, e2, ray, tmin, tmax).is_some()
+        }) || (0..self.spheres.len()).any(|i| {
+            let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+            crate::intersect::intersect_sphere(c, r2, ray, tmin, tmax).is_some()
+        }) || (0..self.transformed.len()).any(|i| {
+            intersect_transformed_sphere(&self.transformed.inverse(i), ray, tmin, tmax).is_some()
+        })
+    }
+
+    /// Brute-force any hit of a packet over every bounded primitive.
+    fn occluded_brute_packet(&self, rays: &RayPacket, tmax: F32x8) -> Mask {
+        let mut occluded = mask_none();
+        for i in 0..self.triangles.len() {
+            let (v0, e1, e2) = self.triangles.get(i);
+            occluded |= intersect_triangle_packet(v0, e1, e2, rays, tmax).0;
+        }
+        for i in 0..self.spheres.len() {
+            let (c, r2) = (self.spheres.center(i), self.spheres.radius2[i]);
+            occluded |= crate::intersect::intersect_sphere_packet(c, r2, rays, tmax).0;
+        }
+        for i in 0..self.transformed.len() {
+            occluded |=
+                intersect_transformed_sphere_packet(&self.transformed.inverse(i), rays, tmax).0;
+        }
+        occluded & rays.active
+    }
+}
+
+/// Counts per lane, for the heatmap: the BVH's probe (one per node a lane enters) and the
+/// primitive tests of the leaves a lane reaches.
+#[derive(Default)]
+struct LaneCounter([u32; LANES]);
+
+impl LaneCounter {
+    fn add(&mut self, lanes: Mask, n: u32) {
+        let bits = bitmask(lanes);
+        for (lane, c) in self.0.iter_mut().enumerate() {
+            if bits >> lane & 1 == 1 {
+                *c += n;
+            }
+        }
+    }
+}
+
+impl crate::bvh::TraversalProbe for LaneCounter {
+    fn node(&mut self, lanes: Mask) {
+        self.add(lanes, 1);
+    }
+}
+
+/// Takes the lanes `m` of candidate `(ti, id)` into `(t, prim)` where nearer, or as near with a
+/// smaller index.
+#[inline(always)]
+fn take_packet(m: Mask, ti: F32x8, id: i32, t: &mut F32x8, prim: &mut I32x8) {
+    let id8 = I32x8::splat(id);
+    let smaller: Mask = bytemuck::cast(id8.simd_lt(*prim));
+    let hit = m & (lt(ti, *t) | (ti.simd_eq(*t) & smaller));
+    *t = select(hit, ti, *t);
+    *prim = select_i32(hit, id8, *prim);
+}
+
+/// The root rule of the sphere kernels with the tie rule, one ray (lane 0 of splatted roots).
+#[inline(always)]
+fn take_roots(real: F32x4, t0: F32x4, t1: F32x4, tmin: f32, id: i32, best: &mut Best) {
+    if real.bits() & 1 == 0 {
+        return;
+    }
+    let (t0, t1) = (t0.to_array()[0], t1.to_array()[0]);
+    let closer = |t: f32| t < best.t || (t == best.t && id < best.prim);
+    if t0 > tmin && closer(t0) {
+        best.take(t0, id);
+    } else if t1 > tmin && closer(t1) {
+        best.take(t1, id);
+    }
+}
+
+/// [`take_roots`] for the lanes `real` of a packet.
+#[inline(always)]
+fn take_roots_packet(
+    real: Mask,
+    t0: F32x8,
+    t1: F32x8,
+    tmin: F32x8,
+    id: i32,
+    t: &mut F32x8,
+    prim: &mut I32x8,
+) {
+    let id8 = I32x8::splat(id);
+    let smaller: Mask = bytemuck::cast(id8.simd_lt(*prim));
+    let closer = |x: F32x8| lt(x, *t) | (x.simd_eq(*t) & smaller);
+    let a0 = real & gt(t0, tmin) & closer(t0);
+    let a1 = real & gt(t1, tmin) & closer(t1);
+    let hit = a0 | a1;
+    *t = select(hit, select(a0, t0, t1), *t);
+    *prim = select_i32(hit, id8, *prim);
+}
