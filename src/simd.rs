@@ -224,6 +224,9 @@ pub fn sqrt(a: F32x8) -> F32x8 {
 /// Loads up to 8 values; missing lanes get `fill`.
 #[inline]
 pub fn load_partial(values: &[f32], fill: f32) -> F32x8 {
+    if let Ok(full) = <[f32; LANES]>::try_from(values) {
+        return F32x8::new(full);
+    }
     F32x8::new(std::array::from_fn(|i| {
         values.get(i).copied().unwrap_or(fill)
     }))

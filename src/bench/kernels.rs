@@ -11,11 +11,13 @@ use rayon::ThreadPool;
 use rayon::prelude::*;
 
 use super::queues::{BenchPacket, BenchRay, PacketQueue, RayQueue};
+use crate::bvh::MAX_STREAM;
 use crate::geometry::Geometry;
-use crate::packet::{HitPacket, NO_HIT};
-use crate::simd::{Mask, bitmask, lanes, lanes_i32, mask_none};
+use crate::packet::{HitPacket, NO_HIT, RayPacket};
+use crate::simd::{F32x8, Mask, bitmask, lanes, lanes_i32, mask_none};
 
-/// Queue entries (rays or packets) per rayon task when tracing on several threads.
+/// Queue entries (rays or packets) per rayon task when tracing on several threads (a multiple
+/// of [`MAX_STREAM`]).
 const CHUNK: usize = 64;
 
 /// One way of tracing a queue: the entry it traces in one step, the result it writes for it,
@@ -33,6 +35,14 @@ pub trait Kernel {
     fn fresh(item: &Self::Item) -> Self::Result;
     /// Traces `item` into `result`.
     fn trace(geometry: &Geometry, item: &Self::Item, result: &mut Self::Result);
+    /// Traces consecutive `items` into their `results` (kernels that trace several entries
+    /// together, such as packet streams, override it).
+    #[inline(always)]
+    fn trace_many(geometry: &Geometry, items: &[Self::Item], results: &mut [Self::Result]) {
+        for (item, result) in items.iter().zip(results) {
+            Self::trace(geometry, item, result);
+        }
+    }
     /// Adds the hits of `result` to `tally`.
     fn count(result: &Self::Result, tally: &mut Tally);
 }
@@ -75,7 +85,20 @@ impl Kernel for Closest {
     }
 }
 
-/// The closest hits of 8 rays, the path the renderer uses.
+/// The rays of up to [`MAX_STREAM`] consecutive packets, gathered for a stream query.
+#[inline(always)]
+fn gather(packets: &[BenchPacket]) -> ([RayPacket; MAX_STREAM], [F32x8; MAX_STREAM]) {
+    let mut rays = [packets[0].rays; MAX_STREAM];
+    let mut tmax = [packets[0].tmax; MAX_STREAM];
+    for (k, p) in packets.iter().enumerate() {
+        (rays[k], tmax[k]) = (p.rays, p.tmax);
+    }
+    (rays, tmax)
+}
+
+/// The closest hits of 8 rays, the path the renderer uses: groups of up to [`MAX_STREAM`]
+/// packets through [`Geometry::closest_hit_batch`] (a stream where the rays are coherent,
+/// single rays where they are not).
 pub struct ClosestPacket;
 
 impl Kernel for ClosestPacket {
@@ -88,7 +111,14 @@ impl Kernel for ClosestPacket {
     }
     #[inline(always)]
     fn trace(geometry: &Geometry, p: &BenchPacket, hit: &mut HitPacket) {
-        geometry.closest_hit_packet(&p.rays, hit);
+        geometry.closest_hit_batch(std::slice::from_ref(&p.rays), std::slice::from_mut(hit));
+    }
+    #[inline(always)]
+    fn trace_many(geometry: &Geometry, items: &[BenchPacket], hits: &mut [HitPacket]) {
+        for (p, h) in items.chunks(MAX_STREAM).zip(hits.chunks_mut(MAX_STREAM)) {
+            let (rays, _) = gather(p);
+            geometry.closest_hit_batch(&rays[..p.len()], h);
+        }
     }
     fn count(hit: &HitPacket, tally: &mut Tally) {
         for (t, prim) in lanes(hit.t).into_iter().zip(lanes_i32(hit.prim)) {
@@ -119,7 +149,8 @@ impl Kernel for Any {
     }
 }
 
-/// The occluded lanes of 8 rays (shadow rays).
+/// The occluded lanes of 8 rays (shadow rays), the path the renderer uses: groups of up to
+/// [`MAX_STREAM`] packets through [`Geometry::occluded_batch`].
 pub struct AnyPacket;
 
 impl Kernel for AnyPacket {
@@ -132,7 +163,18 @@ impl Kernel for AnyPacket {
     }
     #[inline(always)]
     fn trace(geometry: &Geometry, p: &BenchPacket, occluded: &mut Mask) {
-        *occluded = geometry.occluded_packet(&p.rays, p.tmax);
+        let (rays, tmax) = (std::slice::from_ref(&p.rays), std::slice::from_ref(&p.tmax));
+        geometry.occluded_batch(rays, tmax, std::slice::from_mut(occluded));
+    }
+    #[inline(always)]
+    fn trace_many(geometry: &Geometry, items: &[BenchPacket], occluded: &mut [Mask]) {
+        for (p, o) in items
+            .chunks(MAX_STREAM)
+            .zip(occluded.chunks_mut(MAX_STREAM))
+        {
+            let (rays, tmax) = gather(p);
+            geometry.occluded_batch(&rays[..p.len()], &tmax[..p.len()], o);
+        }
     }
     fn count(occluded: &Mask, tally: &mut Tally) {
         tally.hits += bitmask(*occluded).count_ones() as usize;
@@ -149,20 +191,12 @@ pub fn trace<K: Kernel>(
     pool: Option<&ThreadPool>,
 ) {
     match pool {
-        None => {
-            for (item, result) in items.iter().zip(results) {
-                K::trace(geometry, item, result);
-            }
-        }
+        None => K::trace_many(geometry, items, results),
         Some(pool) => pool.install(|| {
             items
                 .par_chunks(CHUNK)
                 .zip(results.par_chunks_mut(CHUNK))
-                .for_each(|(items, results)| {
-                    for (item, result) in items.iter().zip(results) {
-                        K::trace(geometry, item, result);
-                    }
-                })
+                .for_each(|(items, results)| K::trace_many(geometry, items, results))
         }),
     }
 }

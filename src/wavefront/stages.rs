@@ -6,12 +6,13 @@ use bumpalo::Bump;
 
 use super::queue::{HitColumns, NO_NODE, RayQueue, ShadowQueue};
 use super::{Band, BandOutput, CameraSamples, Context, Run};
+use crate::bvh::MAX_STREAM;
 use crate::geometry::Geometry;
 use crate::math::{Ray, Vec2, Vec3, saturate};
-use crate::packet::{HitPacket, NO_HIT};
+use crate::packet::{HitPacket, NO_HIT, RayPacket};
 use crate::scene::Camera;
 use crate::shade::{self, EPSILON};
-use crate::simd::{LANES, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits};
+use crate::simd::{F32x8, LANES, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits, mask_none};
 
 /// The queues one bounce reads and writes.
 pub struct BounceQueues<'c, 's, 'n> {
@@ -74,7 +75,9 @@ pub fn generate_camera_rays(camera: &Camera, band: Band, queue: &mut RayQueue<'_
     generate_sample_rays(camera, &samples, run, queue);
 }
 
-/// Finds the closest hit of every queued ray, 8 rays at a time.
+/// Finds the closest hit of every queued ray: packets of 8 consecutive rays, in groups of
+/// [`MAX_STREAM`] packets that [`Geometry::closest_hit_batch`] traces as a stream where they
+/// are coherent (camera rays: a 32x2-pixel strip) and ray by ray where they are not.
 pub fn intersect_closest<'s>(
     geometry: &Geometry,
     rays: &RayQueue<'_>,
@@ -82,13 +85,18 @@ pub fn intersect_closest<'s>(
     scratch: &'s Bump,
 ) -> HitColumns<'s> {
     let mut hits = HitColumns::with_capacity_in(rays.len(), scratch);
-    for first in (0..rays.len()).step_by(LANES) {
-        let packet = rays.packet(first, tmin);
-        let mut hit = HitPacket::new(f32::INFINITY);
-        geometry.closest_hit_packet(&packet, &mut hit);
-        let n = (rays.len() - first).min(LANES);
-        hits.t.extend_from_slice(&lanes(hit.t)[..n]);
-        hits.prim.extend_from_slice(&lanes_i32(hit.prim)[..n]);
+    let group = LANES * MAX_STREAM;
+    for first in (0..rays.len()).step_by(group) {
+        let packets = (rays.len() - first).div_ceil(LANES).min(MAX_STREAM);
+        let batch: [RayPacket; MAX_STREAM] =
+            std::array::from_fn(|k| rays.packet(first + (k % packets) * LANES, tmin));
+        let mut hit = [HitPacket::new(f32::INFINITY); MAX_STREAM];
+        geometry.closest_hit_batch(&batch[..packets], &mut hit[..packets]);
+        for (k, h) in hit[..packets].iter().enumerate() {
+            let n = (rays.len() - first - k * LANES).min(LANES);
+            hits.t.extend_from_slice(&lanes(h.t)[..n]);
+            hits.prim.extend_from_slice(&lanes_i32(h.prim)[..n]);
+        }
     }
     hits
 }
@@ -158,67 +166,109 @@ pub fn shade_hits(
     }
 }
 
-/// Traces the queued shadow rays, 8 at a time, and adds the light of the unblocked ones. With
+/// Traces the queued shadow rays and adds the light of the unblocked ones: packets of 8
+/// consecutive rays in groups of [`MAX_STREAM`], through [`Geometry::occluded_batch`] (a stream
+/// where the rays are coherent, as towards a point light from neighbouring hits). With
 /// transparent shadows, each lane walks its hits in order, tinting by their transparent colour.
 pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut BandOutput<'_>) {
-    for first in (0..shadows.len()).step_by(LANES) {
-        let (mut rays, max_t) = shadows.packet(first, EPSILON);
-        let n = (shadows.len() - first).min(LANES);
-        let mut light = [Vec3::ONE; LANES];
+    let group = LANES * MAX_STREAM;
+    for first in (0..shadows.len()).step_by(group) {
+        let packets = (shadows.len() - first).div_ceil(LANES).min(MAX_STREAM);
+        let loaded: [(RayPacket, F32x8); MAX_STREAM] =
+            std::array::from_fn(|k| shadows.packet(first + (k % packets) * LANES, EPSILON));
+        let mut light = [[Vec3::ONE; LANES]; MAX_STREAM];
         if ctx.opts.transparent_shadows {
-            let mut tmin = lanes(rays.tmin);
-            while bitmask(rays.active) != 0 {
-                let mut hit = HitPacket::with_tmax(max_t);
-                ctx.geometry.closest_hit_packet(&rays, &mut hit);
-                let (ts, prims) = (lanes(hit.t), lanes_i32(hit.prim));
-                let mut active = bitmask(rays.active);
-                for lane in 0..n {
-                    if active >> lane & 1 == 0 {
-                        continue;
-                    }
-                    if prims[lane] == NO_HIT {
-                        active &= !(1 << lane);
-                        continue;
-                    }
-                    let ray = rays.ray(lane);
-                    let material = ctx
-                        .geometry
-                        .surface(prims[lane] as u32, &ray, ts[lane])
-                        .material;
-                    let transparent = ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
-                    light[lane] = saturate(light[lane] * transparent);
-                    tmin[lane] = ts[lane];
-                    if light[lane] == Vec3::ZERO {
-                        active &= !(1 << lane);
-                    }
-                }
-                rays.active = mask_from_bits(active);
-                rays.tmin = from_lanes(tmin);
+            for (k, (rays, max_t)) in loaded[..packets].iter().enumerate() {
+                let n = (shadows.len() - first - k * LANES).min(LANES);
+                transparent_shadow(ctx, *rays, *max_t, n, &mut light[k]);
             }
         } else {
-            let occluded = bitmask(ctx.geometry.occluded_packet(&rays, max_t));
-            for (lane, l) in light.iter_mut().enumerate().take(n) {
-                if occluded >> lane & 1 == 1 {
-                    *l = Vec3::ZERO;
+            let rays: [RayPacket; MAX_STREAM] = std::array::from_fn(|k| loaded[k].0);
+            let max_t: [F32x8; MAX_STREAM] = std::array::from_fn(|k| loaded[k].1);
+            let mut occluded = [mask_none(); MAX_STREAM];
+            ctx.geometry.occluded_batch(
+                &rays[..packets],
+                &max_t[..packets],
+                &mut occluded[..packets],
+            );
+            for (l, o) in light.iter_mut().zip(occluded) {
+                let o = bitmask(o);
+                for (lane, l) in l.iter_mut().enumerate() {
+                    if o >> lane & 1 == 1 {
+                        *l = Vec3::ZERO;
+                    }
                 }
             }
         }
-        for (lane, l) in light.iter().enumerate().take(n) {
-            let k = first + lane;
-            out.color[shadows.pixel[k] as usize] += shadows.contribution[k] * *l;
-            if let Some(t) = out.tree.as_deref_mut() {
-                let parent = shadows.parent[k];
-                if parent != NO_NODE {
-                    // The tree names the nearest occluder, which an any-hit test does not find.
-                    let ray: Ray = shadows.ray(k);
-                    let max_t = shadows.max_t[k];
-                    let occluder = ctx
-                        .geometry
-                        .closest_hit(&ray, EPSILON, max_t)
-                        .map(|(t, prim)| ctx.geometry.surface(prim, &ray, t));
-                    t.add_shadow(parent as usize, shadows.light[k], &ray, max_t, occluder);
-                }
+        for (k, l) in light[..packets].iter().enumerate() {
+            let n = (shadows.len() - first - k * LANES).min(LANES);
+            for (lane, l) in l.iter().enumerate().take(n) {
+                add_shadow_light(ctx, shadows, first + k * LANES + lane, *l, out);
             }
+        }
+    }
+}
+
+/// The light the `n` rays of a packet of shadow rays carry through transparent occluders.
+fn transparent_shadow(
+    ctx: &Context<'_>,
+    mut rays: RayPacket,
+    max_t: F32x8,
+    n: usize,
+    light: &mut [Vec3; LANES],
+) {
+    let mut tmin = lanes(rays.tmin);
+    while bitmask(rays.active) != 0 {
+        let mut hit = HitPacket::with_tmax(max_t);
+        ctx.geometry.closest_hit_packet(&rays, &mut hit);
+        let (ts, prims) = (lanes(hit.t), lanes_i32(hit.prim));
+        let mut active = bitmask(rays.active);
+        for lane in 0..n {
+            if active >> lane & 1 == 0 {
+                continue;
+            }
+            if prims[lane] == NO_HIT {
+                active &= !(1 << lane);
+                continue;
+            }
+            let ray = rays.ray(lane);
+            let material = ctx
+                .geometry
+                .surface(prims[lane] as u32, &ray, ts[lane])
+                .material;
+            let transparent = ctx.scene.phong_at(material, ray.at(ts[lane])).transparent;
+            light[lane] = saturate(light[lane] * transparent);
+            tmin[lane] = ts[lane];
+            if light[lane] == Vec3::ZERO {
+                active &= !(1 << lane);
+            }
+        }
+        rays.active = mask_from_bits(active);
+        rays.tmin = from_lanes(tmin);
+    }
+}
+
+/// Adds shadow ray `k`'s light (`light`: what reaches the surface) to its pixel, and records
+/// the ray in the ray tree.
+fn add_shadow_light(
+    ctx: &Context<'_>,
+    shadows: &ShadowQueue<'_>,
+    k: usize,
+    light: Vec3,
+    out: &mut BandOutput<'_>,
+) {
+    out.color[shadows.pixel[k] as usize] += shadows.contribution[k] * light;
+    if let Some(t) = out.tree.as_deref_mut() {
+        let parent = shadows.parent[k];
+        if parent != NO_NODE {
+            // The tree names the nearest occluder, which an any-hit test does not find.
+            let ray: Ray = shadows.ray(k);
+            let max_t = shadows.max_t[k];
+            let occluder = ctx
+                .geometry
+                .closest_hit(&ray, EPSILON, max_t)
+                .map(|(t, prim)| ctx.geometry.surface(prim, &ray, t));
+            t.add_shadow(parent as usize, shadows.light[k], &ray, max_t, occluder);
         }
     }
 }
