@@ -215,6 +215,34 @@ pub fn max(a: F32x8, b: F32x8) -> F32x8 {
     a.fast_max(b)
 }
 
+/// The smallest lane (for lanes without NaN).
+#[inline(always)]
+pub fn reduce_min(a: F32x8) -> f32 {
+    let v = a.to_array();
+    let m = |x: f32, y: f32| if x < y { x } else { y };
+    m(
+        m(m(v[0], v[1]), m(v[2], v[3])),
+        m(m(v[4], v[5]), m(v[6], v[7])),
+    )
+}
+
+/// The largest lane (for lanes without NaN).
+#[inline(always)]
+pub fn reduce_max(a: F32x8) -> f32 {
+    let v = a.to_array();
+    let m = |x: f32, y: f32| if x > y { x } else { y };
+    m(
+        m(m(v[0], v[1]), m(v[2], v[3])),
+        m(m(v[4], v[5]), m(v[6], v[7])),
+    )
+}
+
+/// Lane-wise `a` with the sign of `sign`.
+#[inline(always)]
+pub fn copysign(a: F32x8, sign: F32x8) -> F32x8 {
+    a.copysign(sign)
+}
+
 /// Lane-wise square root.
 #[inline(always)]
 pub fn sqrt(a: F32x8) -> F32x8 {

@@ -150,9 +150,13 @@ impl Record {
         tags: 0,
     };
 
+    /// Adds a reference; its bounds only if `BOUNDS` (a split already knows its sides'
+    /// bounds from the bins).
     #[inline(always)]
-    fn add(&mut self, r: &PrimRef) {
-        self.bounds.grow(r.min, r.max);
+    fn add<const BOUNDS: bool>(&mut self, r: &PrimRef) {
+        if BOUNDS {
+            self.bounds.grow(r.min, r.max);
+        }
         let c = r.centroid2();
         self.centroids.grow(c, c);
         self.tags |= 1 << r.tag();
@@ -174,7 +178,7 @@ impl Record {
         }
         let mut r = Record::EMPTY;
         for p in refs {
-            r.add(p);
+            r.add::<true>(p);
         }
         r
     }
@@ -192,18 +196,23 @@ pub fn build(
     if n == 0 {
         return Bvh8::default();
     }
-    let mut refs: Vec<PrimRef> = (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| {
-            let (b, tag) = prim(i);
-            assert!(tag < 32, "primitive tags are below 32");
-            PrimRef {
-                min: b.min.extend(f32::from_bits(i as u32)),
-                max: b.max.extend(f32::from_bits(tag as u32)),
-            }
-        })
-        .collect();
+    let make = |i: usize| {
+        let (b, tag) = prim(i);
+        assert!(tag < 32, "primitive tags are below 32");
+        PrimRef {
+            min: b.min.extend(f32::from_bits(i as u32)),
+            max: b.max.extend(f32::from_bits(tag as u32)),
+        }
+    };
+    let mut refs: Vec<PrimRef> = if n > PARALLEL_PASS {
+        (0..n)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(make)
+            .collect()
+    } else {
+        (0..n).map(make).collect()
+    };
     let rec = Record::of(&refs);
     // A tree over n primitives has fewer than n interior nodes (each has two children or more).
     let builder = Builder {
@@ -223,6 +232,27 @@ pub fn build(
     }
 }
 
+/// A child being opened: its references' range and record; `open` until it is known not to
+/// split further.
+#[derive(Clone, Copy)]
+struct Child {
+    start: usize,
+    len: usize,
+    rec: Record,
+    open: bool,
+}
+
+impl Child {
+    fn new(start: usize, len: usize, rec: Record) -> Child {
+        Child {
+            start,
+            len,
+            rec,
+            open: true,
+        }
+    }
+}
+
 struct Builder<'s, S: LeafSink> {
     settings: BuildSettings,
     nodes: Arena<Node8>,
@@ -237,6 +267,8 @@ struct Split {
     boundary: usize,
     mapping: Mapping,
     cost: f32,
+    left: Box4,
+    right: Box4,
 }
 
 /// How centroids map to bins: `nb` bins spanning the centroid bounds on each axis.
@@ -354,6 +386,7 @@ impl<S: LeafSink> Builder<'_, S> {
         }
         let mut best: Option<Split> = None;
         let mut right_cost = [0.0f32; MAX_BINS];
+        let mut right_box = [Box4::EMPTY; MAX_BINS];
         for axis in 0..3 {
             if m.scale[axis] == 0.0 {
                 continue;
@@ -365,6 +398,7 @@ impl<S: LeafSink> Builder<'_, S> {
             for i in (1..nb).rev() {
                 acc = acc.union(&boxes[i]);
                 n += counts[i];
+                right_box[i] = acc;
                 right_cost[i] = if n == 0 {
                     f32::INFINITY
                 } else {
@@ -384,6 +418,8 @@ impl<S: LeafSink> Builder<'_, S> {
                         boundary: i,
                         mapping: m,
                         cost,
+                        left: acc,
+                        right: right_box[i],
                     });
                 }
             }
@@ -406,11 +442,14 @@ impl<S: LeafSink> Builder<'_, S> {
         match split {
             Some(s) => {
                 let (axis, boundary, m) = (s.axis, s.boundary, s.mapping);
-                partition_by(refs, &|r: &PrimRef| m.bins(r.centroid2())[axis] < boundary)
+                let goes_left = |r: &PrimRef| m.bins(r.centroid2())[axis] < boundary;
+                let (mid, mut l, mut r) = partition_by::<false>(refs, &goes_left);
+                (l.bounds, r.bounds) = (s.left, s.right);
+                (mid, l, r)
             }
             None if rec.tags.count_ones() > 1 => {
                 let tag = rec.tags.trailing_zeros();
-                partition_by(refs, &|r: &PrimRef| r.tag() == tag)
+                partition_by::<true>(refs, &|r: &PrimRef| r.tag() == tag)
             }
             None => {
                 // Every centroid coincides: halves, in index order so the tree is the same
@@ -449,26 +488,34 @@ impl<S: LeafSink> Builder<'_, S> {
             return self.leaf(refs);
         }
         // Open up to WIDTH children: split the first, then the largest splittable child.
-        let mut children: Vec<(usize, usize, Record, bool)> = Vec::with_capacity(WIDTH);
+        let mut children = [Child {
+            start: 0,
+            len: 0,
+            rec: Record::EMPTY,
+            open: false,
+        }; WIDTH];
         let (mid, l, r) = self.partition(refs, &rec, split.as_ref());
-        children.push((0, mid, l, true));
-        children.push((mid, n - mid, r, true));
-        while children.len() < WIDTH {
-            let pick = children
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| c.3 && (c.1 > self.settings.min_leaf || c.2.tags.count_ones() > 1))
-                .max_by(|a, b| {
-                    a.1.2
-                        .bounds
-                        .half_area()
-                        .total_cmp(&b.1.2.bounds.half_area())
-                })
-                .map(|(i, _)| i);
+        children[0] = Child::new(0, mid, l);
+        children[1] = Child::new(mid, n - mid, r);
+        let mut count = 2;
+        while count < WIDTH {
+            let mut pick = None;
+            let mut best_area = f32::NEG_INFINITY;
+            for (k, c) in children[..count].iter().enumerate() {
+                let splittable = c.len > self.settings.min_leaf || c.rec.tags.count_ones() > 1;
+                if c.open && splittable && c.rec.bounds.half_area() > best_area {
+                    (pick, best_area) = (Some(k), c.rec.bounds.half_area());
+                }
+            }
             let Some(k) = pick else {
                 break;
             };
-            let (start, len, crec, _) = children[k];
+            let Child {
+                start,
+                len,
+                rec: crec,
+                ..
+            } = children[k];
             let part = &mut refs[start..start + len];
             // at the depth limit only kinds are separated
             let s = if depth >= MAX_DEPTH {
@@ -480,48 +527,60 @@ impl<S: LeafSink> Builder<'_, S> {
                 && crec.tags.count_ones() == 1
                 && (len <= self.settings.max_leaf || depth >= MAX_DEPTH)
             {
-                children[k].3 = false;
+                children[k].open = false;
                 continue;
             }
             let (m, cl, cr) = self.partition(part, &crec, s.as_ref());
-            children[k] = (start, m, cl, true);
-            children.push((start + m, len - m, cr, true));
+            children[k] = Child::new(start, m, cl);
+            children[count] = Child::new(start + m, len - m, cr);
+            count += 1;
         }
+        let children = &mut children[..count];
         let index = self.nodes.alloc(1);
-        // Largest child first (Embree: faster any-hit traversal); slices in memory order.
-        children.sort_by(|a, b| b.2.bounds.half_area().total_cmp(&a.2.bounds.half_area()));
-        let mut order: Vec<usize> = (0..children.len()).collect();
-        order.sort_by_key(|&i| children[i].0);
-        let mut slices: Vec<Option<&mut [PrimRef]>> = (0..children.len()).map(|_| None).collect();
-        let mut rest = &mut refs[..];
-        let mut at = 0;
-        for &i in &order {
-            let (start, len) = (children[i].0, children[i].1);
-            let (head, tail) = std::mem::take(&mut rest).split_at_mut(start - at + len);
-            slices[i] = Some(&mut head[start - at..]);
-            rest = tail;
-            at = start + len;
-        }
-        let jobs: Vec<(&mut [PrimRef], Record)> = slices
-            .into_iter()
-            .zip(&children)
-            .map(|(s, c)| (s.unwrap_or_default(), c.2))
-            .collect();
-        let refs_out: Vec<NodeRef> = if n > PARALLEL_SUBTREE {
-            jobs.into_par_iter()
-                .map(|(s, r)| self.subtree(s, r, depth + 1, &mut Bins::new()))
-                .collect()
+        // Largest child first (Embree: faster any-hit traversal).
+        children.sort_unstable_by(|a, b| {
+            b.rec
+                .bounds
+                .half_area()
+                .total_cmp(&a.rec.bounds.half_area())
+        });
+        let mut kids = [(NodeRef::EMPTY, Aabb::EMPTY); WIDTH];
+        if n > PARALLEL_SUBTREE {
+            // disjoint slices of the references, one per child, for parallel subtrees
+            let mut order: Vec<usize> = (0..count).collect();
+            order.sort_by_key(|&i| children[i].start);
+            let mut slices: Vec<(usize, &mut [PrimRef])> = Vec::with_capacity(count);
+            let mut rest = &mut refs[..];
+            let mut at = 0;
+            for &i in &order {
+                let Child { start, len, .. } = children[i];
+                let (head, tail) = std::mem::take(&mut rest).split_at_mut(start - at + len);
+                slices.push((i, &mut head[start - at..]));
+                rest = tail;
+                at = start + len;
+            }
+            let built: Vec<(usize, NodeRef)> = slices
+                .into_par_iter()
+                .map(|(i, s)| {
+                    (
+                        i,
+                        self.subtree(s, children[i].rec, depth + 1, &mut Bins::new()),
+                    )
+                })
+                .collect();
+            for (i, r) in built {
+                kids[i] = (r, children[i].rec.bounds.aabb());
+            }
         } else {
-            jobs.into_iter()
-                .map(|(s, r)| self.subtree(s, r, depth + 1, bins))
-                .collect()
-        };
-        let kids: Vec<(NodeRef, Aabb)> = refs_out
-            .into_iter()
-            .zip(&children)
-            .map(|(r, c)| (r, c.2.bounds.aabb()))
-            .collect();
-        self.nodes.set(index, Node8::new(&kids));
+            for (kid, c) in kids.iter_mut().zip(children.iter()) {
+                let part = &mut refs[c.start..c.start + c.len];
+                *kid = (
+                    self.subtree(part, c.rec, depth + 1, bins),
+                    c.rec.bounds.aabb(),
+                );
+            }
+        }
+        self.nodes.set(index, Node8::new(&kids[..count]));
         NodeRef::node(index as u32)
     }
 
@@ -555,18 +614,18 @@ impl<S: LeafSink> Builder<'_, S> {
 }
 
 /// Partitions `refs` so those `goes_left` come first; returns the split position and the two
-/// sides' records (gathered on the way). Big ranges partition in parallel chunks, then swap
-/// the misplaced references across the split position.
-fn partition_by(
+/// sides' records (gathered on the way; their bounds only if `BOUNDS`). Big ranges partition in
+/// parallel chunks, then swap the misplaced references across the split position.
+fn partition_by<const BOUNDS: bool>(
     refs: &mut [PrimRef],
     goes_left: &(impl Fn(&PrimRef) -> bool + Sync),
 ) -> (usize, Record, Record) {
     if refs.len() <= PARALLEL_PASS {
-        return partition_serial(refs, goes_left);
+        return partition_serial::<BOUNDS>(refs, goes_left);
     }
     let parts: Vec<(usize, Record, Record)> = refs
         .par_chunks_mut(PARALLEL_PASS)
-        .map(|c| partition_serial(c, goes_left))
+        .map(|c| partition_serial::<BOUNDS>(c, goes_left))
         .collect();
     let mid: usize = parts.iter().map(|p| p.0).sum();
     let (mut l, mut r) = (Record::EMPTY, Record::EMPTY);
@@ -594,25 +653,31 @@ fn partition_by(
     (mid, l, r)
 }
 
-/// [`partition_by`] on one thread: each reference is examined once, at position `i`; one that
-/// goes right is swapped with the unexamined one at `j - 1`.
-fn partition_serial(
+/// [`partition_by`] on one thread, from both ends: only misplaced pairs are swapped.
+fn partition_serial<const BOUNDS: bool>(
     refs: &mut [PrimRef],
     goes_left: &impl Fn(&PrimRef) -> bool,
 ) -> (usize, Record, Record) {
     let (mut l, mut r) = (Record::EMPTY, Record::EMPTY);
     let mut i = 0;
     let mut j = refs.len();
-    while i < j {
-        let p = refs[i];
-        if goes_left(&p) {
-            l.add(&p);
+    loop {
+        while i < j && goes_left(&refs[i]) {
+            l.add::<BOUNDS>(&refs[i]);
             i += 1;
-        } else {
-            r.add(&p);
-            j -= 1;
-            refs.swap(i, j);
         }
+        while i < j && !goes_left(&refs[j - 1]) {
+            r.add::<BOUNDS>(&refs[j - 1]);
+            j -= 1;
+        }
+        if i >= j {
+            return (i, l, r);
+        }
+        // refs[i] goes right and refs[j - 1] left
+        r.add::<BOUNDS>(&refs[i]);
+        l.add::<BOUNDS>(&refs[j - 1]);
+        refs.swap(i, j - 1);
+        i += 1;
+        j -= 1;
     }
-    (i, l, r)
 }

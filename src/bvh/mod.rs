@@ -305,6 +305,15 @@ fn safe_inverse(d: f32) -> f32 {
     }
 }
 
+/// [`safe_inverse`] for 8 lanes (the same bits in every lane).
+#[inline(always)]
+fn safe_inverse8(d: F32x8) -> F32x8 {
+    use crate::simd::{copysign, lt, select};
+    let tiny = F32x8::splat(1e-30);
+    let small = lt(d.abs(), tiny);
+    F32x8::splat(1.0) / select(small, copysign(tiny, d), d)
+}
+
 impl Bvh8 {
     /// True when the tree holds nothing.
     pub fn is_empty(&self) -> bool {

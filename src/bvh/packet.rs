@@ -6,11 +6,13 @@
 
 use super::stack::Stack;
 use super::{
-    Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, TraversalProbe, WIDTH, safe_inverse,
+    Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, TraversalProbe, WIDTH, safe_inverse8,
     widen8,
 };
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, Vec3x8, all, any, bitmask, ge, lanes, le, max, min, select};
+use crate::simd::{
+    F32x8, Mask, Vec3x8, all, any, bitmask, ge, lanes, le, max, min, reduce_max, reduce_min, select,
+};
 
 /// Entries a packet stack may hold.
 pub const PACKET_STACK_DEPTH: usize = (WIDTH - 1) * MAX_DEPTH + 1;
@@ -23,15 +25,28 @@ pub(super) struct Packet8 {
 }
 
 impl Packet8 {
+    /// A placeholder (no rays).
+    pub(super) const EMPTY: Packet8 = Packet8 {
+        org: Vec3x8 {
+            x: F32x8::ZERO,
+            y: F32x8::ZERO,
+            z: F32x8::ZERO,
+        },
+        inv: Vec3x8 {
+            x: F32x8::ZERO,
+            y: F32x8::ZERO,
+            z: F32x8::ZERO,
+        },
+    };
+
     #[inline(always)]
     pub(super) fn new(rays: &RayPacket) -> Packet8 {
-        let safe = |d: F32x8| F32x8::new(lanes(d).map(safe_inverse));
         Packet8 {
             org: rays.origin,
             inv: Vec3x8 {
-                x: safe(rays.dir.x),
-                y: safe(rays.dir.y),
-                z: safe(rays.dir.z),
+                x: safe_inverse8(rays.dir.x),
+                y: safe_inverse8(rays.dir.y),
+                z: safe_inverse8(rays.dir.z),
             },
         }
     }
@@ -98,13 +113,12 @@ impl Frustum {
         if !any_lane {
             return None;
         }
-        let reduce = |v: F32x8, f: fn(f32, f32) -> f32| lanes(v).into_iter().reduce(f).unwrap();
         let mut near = [0; 3];
         let (mut o_near, mut o_far) = ([inf; 3], [inf; 3]);
         let (mut inv_lo, mut inv_hi) = ([inf; 3], [inf; 3]);
         for a in 0..3 {
-            let (ilo, ihi) = (reduce(i_lo[a], f32::min), reduce(i_hi[a], f32::max));
-            let (olo, ohi) = (reduce(o_lo[a], f32::min), reduce(o_hi[a], f32::max));
+            let (ilo, ihi) = (reduce_min(i_lo[a]), reduce_max(i_hi[a]));
+            let (olo, ohi) = (reduce_min(o_lo[a]), reduce_max(o_hi[a]));
             let positive = ilo >= 0.0;
             if !positive && ihi >= 0.0 {
                 return None;
@@ -124,7 +138,7 @@ impl Frustum {
             o_far,
             inv_lo,
             inv_hi,
-            tmin: F32x8::splat(reduce(t_lo, f32::min)),
+            tmin: F32x8::splat(reduce_min(t_lo)),
         })
     }
 
@@ -150,8 +164,11 @@ impl Frustum {
 /// The largest `tmax` among the `lanes`.
 #[inline(always)]
 pub(super) fn max_lane(t: F32x8, lanes_mask: Mask) -> F32x8 {
-    let v = lanes(select(lanes_mask, t, F32x8::splat(f32::NEG_INFINITY)));
-    F32x8::splat(v.into_iter().fold(f32::NEG_INFINITY, f32::max))
+    F32x8::splat(reduce_max(select(
+        lanes_mask,
+        t,
+        F32x8::splat(f32::NEG_INFINITY),
+    )))
 }
 
 /// A pending subtree of a packet traversal: its lanes and their entry distances.
@@ -200,9 +217,7 @@ fn hit_children(
         let key = if frustum.is_some() {
             fnear[i]
         } else {
-            lanes(select(hit, near, F32x8::splat(f32::INFINITY)))
-                .into_iter()
-                .fold(f32::INFINITY, f32::min)
+            reduce_min(select(hit, near, F32x8::splat(f32::INFINITY)))
         };
         out[count] = HitChild {
             node: n.child[i],

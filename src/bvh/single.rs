@@ -60,6 +60,7 @@ impl Bvh8 {
     /// The closest hit of one ray: visits every leaf the ray may hit nearer than `tmax`,
     /// nearest child first; `leaf(leaf, tmax)` tests the leaf's primitives and lowers `tmax`
     /// where it finds a nearer hit.
+    #[inline(always)]
     pub fn closest(
         &self,
         ray: &Ray,
@@ -67,48 +68,60 @@ impl Bvh8 {
         tmax: &mut f32,
         mut leaf: impl FnMut(Leaf, &mut f32),
     ) {
-        if self.root.is_leaf() {
-            if !self.root.is_empty() {
-                leaf(self.root.as_leaf(), tmax);
-            }
+        if self.root.is_empty() {
             return;
         }
         let r = Ray1::new(ray);
         let tmin8 = F32x8::splat(tmin);
         let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
         let mut cur = self.root;
-        'traverse: loop {
-            while !cur.is_leaf() {
+        loop {
+            if !cur.is_leaf() {
                 let n = &self.nodes[cur.index()];
-                let (mut mask, near) = r.test(n, tmin8, F32x8::splat(*tmax));
-                if mask == 0 {
-                    break;
-                }
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if mask == 0 {
-                    cur = n.child[i];
+                let (mask, near) = r.test(n, tmin8, F32x8::splat(*tmax));
+                if mask != 0 {
+                    let c0 = mask.trailing_zeros() as usize;
+                    let rest = mask & (mask - 1);
+                    if rest == 0 {
+                        cur = n.child[c0];
+                        continue;
+                    }
+                    let near = near.to_array();
+                    let c1 = rest.trailing_zeros() as usize;
+                    let rest = rest & (rest - 1);
+                    if rest == 0 {
+                        // two: the farther waits on the stack
+                        let (a, b) = ((n.child[c0], near[c0]), (n.child[c1], near[c1]));
+                        let (first, second) = if a.1 <= b.1 { (a, b) } else { (b, a) };
+                        stack.push(second);
+                        cur = first.0;
+                        continue;
+                    }
+                    // three or more: sort them farthest first, push all but the nearest
+                    let mut hits = [(NodeRef::EMPTY, 0.0f32); WIDTH];
+                    hits[0] = (n.child[c0], near[c0]);
+                    hits[1] = (n.child[c1], near[c1]);
+                    let mut count = 2;
+                    let mut m = rest;
+                    while m != 0 {
+                        let j = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        hits[count] = (n.child[j], near[j]);
+                        count += 1;
+                    }
+                    sort_farthest_first(&mut hits[..count]);
+                    for h in &hits[..count - 1] {
+                        stack.push(*h);
+                    }
+                    cur = hits[count - 1].0;
                     continue;
                 }
-                // Two or more: push them all, sort the new entries farthest first, take the
-                // nearest back off the top.
-                let near = near.to_array();
-                let base = stack.len();
-                stack.push((n.child[i], near[i]));
-                while mask != 0 {
-                    let j = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    stack.push((n.child[j], near[j]));
-                }
-                sort_farthest_first(&mut stack.as_mut_slice()[base..]);
-                cur = stack.pop().map_or(NodeRef::EMPTY, |e| e.0);
-            }
-            if cur.is_leaf() && !cur.is_empty() {
+            } else {
                 leaf(cur.as_leaf(), tmax);
             }
             loop {
                 match stack.pop() {
-                    None => break 'traverse,
+                    None => return,
                     Some((c, near)) if near <= widen(*tmax) => {
                         cur = c;
                         break;
@@ -120,6 +133,7 @@ impl Bvh8 {
     }
 
     /// Single-ray any hit: true as soon as `leaf(leaf)` reports a blocker before `tmax`.
+    #[inline(always)]
     pub fn occluded(
         &self,
         ray: &Ray,
@@ -127,8 +141,8 @@ impl Bvh8 {
         tmax: f32,
         mut leaf: impl FnMut(Leaf) -> bool,
     ) -> bool {
-        if self.root.is_leaf() {
-            return !self.root.is_empty() && leaf(self.root.as_leaf());
+        if self.root.is_empty() {
+            return false;
         }
         let r = Ray1::new(ray);
         let (tmin8, tmax8) = (F32x8::splat(tmin), F32x8::splat(tmax));

@@ -37,19 +37,6 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         // SAFETY: every slot below `len` was written by `push` and `T: Copy`.
         Some(unsafe { self.items[self.len].assume_init() })
     }
-
-    /// The items, oldest first.
-    #[inline(always)]
-    pub fn as_mut_slice(&mut self) -> &mut [T] {
-        // SAFETY: the first `len` slots were written by `push`; MaybeUninit<T> has T's layout.
-        unsafe { std::slice::from_raw_parts_mut(self.items.as_mut_ptr().cast::<T>(), self.len) }
-    }
-
-    /// The number of items.
-    #[inline(always)]
-    pub fn len(&self) -> usize {
-        self.len
-    }
 }
 
 #[cfg(test)]
@@ -59,14 +46,12 @@ mod tests {
     #[test]
     fn push_pop_in_order() {
         let mut s: Stack<(u32, f32), 4> = Stack::new();
-        assert!(s.pop().is_none() && s.len() == 0);
+        assert!(s.pop().is_none());
         for i in 0..4 {
             s.push((i, i as f32));
         }
-        assert_eq!(s.len(), 4);
-        s.as_mut_slice().swap(2, 3);
-        assert_eq!(s.pop(), Some((2, 2.0)));
         assert_eq!(s.pop(), Some((3, 3.0)));
+        assert_eq!(s.pop(), Some((2, 2.0)));
         assert_eq!(s.pop(), Some((1, 1.0)));
         assert_eq!(s.pop(), Some((0, 0.0)));
         assert_eq!(s.pop(), None);

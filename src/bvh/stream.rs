@@ -26,7 +26,7 @@ const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 /// A stream's rays prepared for box tests.
 struct Stream<'r> {
     rays: &'r [RayPacket],
-    packets: [Packet8; MAX_STREAM],
+    packets: &'r [Packet8],
     frustum: Frustum,
 }
 
@@ -67,11 +67,12 @@ impl Stream<'_> {
     /// The largest `tmax` of any active ray.
     #[inline(always)]
     fn tmax_all(&self, tmax: &[F32x8]) -> F32x8 {
-        let mut m = F32x8::splat(f32::NEG_INFINITY);
+        let ninf = F32x8::splat(f32::NEG_INFINITY);
+        let mut m = ninf;
         for (p, t) in self.rays.iter().zip(tmax) {
-            m = crate::simd::max(m, max_lane(*t, p.active));
+            m = crate::simd::max(m, crate::simd::select(p.active, *t, ninf));
         }
-        m
+        max_lane(m, crate::simd::mask_first(LANES))
     }
 
     /// The children of `n` the rays of `mask` may enter, with their ray masks and the
@@ -132,7 +133,8 @@ impl Bvh8 {
         mut leaf: impl FnMut(Leaf, usize, &RayPacket, Mask, &mut F32x8),
     ) {
         assert!(rays.len() <= MAX_STREAM && tmax.len() == rays.len());
-        let Some(s) = self.stream(rays) else {
+        let mut packets = [Packet8::EMPTY; MAX_STREAM];
+        let Some(s) = self.stream(rays, &mut packets) else {
             for (p, (r, t)) in rays.iter().zip(tmax.iter_mut()).enumerate() {
                 self.closest_packet(r, t, |l, r, m, t| leaf(l, p, r, m, t));
             }
@@ -185,7 +187,8 @@ impl Bvh8 {
     ) {
         assert!(rays.len() <= MAX_STREAM && tmax.len() == rays.len());
         assert!(occluded.len() == rays.len());
-        let Some(s) = self.stream(rays) else {
+        let mut packets = [Packet8::EMPTY; MAX_STREAM];
+        let Some(s) = self.stream(rays, &mut packets) else {
             for (p, (r, t)) in rays.iter().zip(tmax).enumerate() {
                 occluded[p] = self.occluded_packet(r, *t, |l, r, m| leaf(l, p, r, m));
             }
@@ -236,17 +239,19 @@ impl Bvh8 {
 
     /// The stream's prepared rays, or `None` (traverse packet by packet) when the tree is a
     /// single leaf or nothing, or the rays share no octant.
-    fn stream<'r>(&self, rays: &'r [RayPacket]) -> Option<Stream<'r>> {
+    #[inline(always)]
+    fn stream<'r>(
+        &self,
+        rays: &'r [RayPacket],
+        packets: &'r mut [Packet8; MAX_STREAM],
+    ) -> Option<Stream<'r>> {
         if self.root.is_leaf() || active_mask(rays) == 0 {
             return None;
         }
-        let mut packets = [Packet8 {
-            org: crate::simd::Vec3x8::zero(),
-            inv: crate::simd::Vec3x8::zero(),
-        }; MAX_STREAM];
         for (p, r) in packets.iter_mut().zip(rays) {
             *p = Packet8::new(r);
         }
+        let packets = &packets[..rays.len()];
         let frustum = Frustum::new(packets.iter().zip(rays).map(|(p, r)| (p, r.active, r.tmin)))?;
         Some(Stream {
             rays,

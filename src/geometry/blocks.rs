@@ -33,14 +33,15 @@ pub const BLOCK: usize = 4;
 /// The geometry index of an unused lane.
 const NO_PRIM: u32 = u32::MAX;
 
-/// Four triangles: `v0`, `e1 = v1 - v0`, `e2 = v2 - v0` as `[x; 4], [y; 4], [z; 4]`, and their
-/// geometry indices. 160 bytes.
+/// Four triangles: `v0`, `e1 = v1 - v0`, `e2 = v2 - v0` and the unnormalised normal
+/// `ng = e1 x e2` as `[x; 4], [y; 4], [z; 4]`, and their geometry indices. 208 bytes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(16))]
 pub struct Triangle4 {
     pub v0: [[f32; 4]; 3],
     pub e1: [[f32; 4]; 3],
     pub e2: [[f32; 4]; 3],
+    pub ng: [[f32; 4]; 3],
     pub prim: [u32; 4],
 }
 
@@ -59,6 +60,7 @@ impl Triangle4 {
         v0: [[0.0; 4]; 3],
         e1: [[0.0; 4]; 3],
         e2: [[0.0; 4]; 3],
+        ng: [[0.0; 4]; 3],
         prim: [NO_PRIM; 4],
     };
 
@@ -67,6 +69,13 @@ impl Triangle4 {
     pub fn lane(&self, k: usize) -> (Vec3, Vec3, Vec3) {
         let v = |c: &[[f32; 4]; 3]| Vec3::new(c[0][k], c[1][k], c[2][k]);
         (v(&self.v0), v(&self.e1), v(&self.e2))
+    }
+
+    /// `ng = e1 x e2` of lane `k`.
+    #[inline(always)]
+    pub fn normal(&self, k: usize) -> Vec3 {
+        let c = &self.ng;
+        Vec3::new(c[0][k], c[1][k], c[2][k])
     }
 }
 
@@ -138,10 +147,12 @@ impl LeafSink for BlockSink<'_> {
                     let mut t = Triangle4::EMPTY;
                     for (k, &p) in chunk.iter().enumerate() {
                         let (v0, e1, e2) = g.triangles.get((p - base) as usize);
+                        let ng = e1.cross(e2);
                         for a in 0..3 {
                             t.v0[a][k] = v0[a];
                             t.e1[a][k] = e1[a];
                             t.e2[a][k] = e2[a];
+                            t.ng[a][k] = ng[a];
                         }
                         t.prim[k] = p;
                     }
@@ -220,8 +231,14 @@ fn take_lanes(hit: u32, t: F32x4, prim: &[u32; 4], best: &mut Best) {
 /// One ray against a block of triangles: `(lanes hit inside (tmin, inf), t)`.
 #[inline(always)]
 fn triangle_block(b: &Triangle4, o: Vec3x4, d: Vec3x4, tmin: F32x4) -> (F32x4, F32x4) {
-    let (e1, e2) = (Vec3x4::from_columns(&b.e1), Vec3x4::from_columns(&b.e2));
-    let (inside, t) = triangle_lanes(Vec3x4::from_columns(&b.v0), e1, e2, e1.cross(e2), o, d);
+    let (inside, t) = triangle_lanes(
+        Vec3x4::from_columns(&b.v0),
+        Vec3x4::from_columns(&b.e1),
+        Vec3x4::from_columns(&b.e2),
+        Vec3x4::from_columns(&b.ng),
+        o,
+        d,
+    );
     (inside & t.gt(tmin), t)
 }
 
@@ -359,7 +376,7 @@ impl Geometry {
                         Vec3x8::splat(v0),
                         Vec3x8::splat(e1),
                         Vec3x8::splat(e2),
-                        Vec3x8::splat(e1.cross(e2)),
+                        Vec3x8::splat(b.normal(k % BLOCK)),
                         rays.origin,
                         rays.dir,
                     );
@@ -411,7 +428,7 @@ impl Geometry {
                         Vec3x8::splat(v0),
                         Vec3x8::splat(e1),
                         Vec3x8::splat(e2),
-                        Vec3x8::splat(e1.cross(e2)),
+                        Vec3x8::splat(b.normal(k % BLOCK)),
                         rays.origin,
                         rays.dir,
                     );

@@ -36,7 +36,7 @@ use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
 use blocks::{BLOCK, BlockSink, Blocks};
 use normals::CornerNormals;
-pub use query::{COHERENT_COS, Path, choose_path};
+pub use query::{COHERENT_COS, Path, SMALL_TREE_NODES, coherence};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 
 /// The kinds of primitive, in geometry-index order.
@@ -292,7 +292,11 @@ impl Geometry {
                     continue;
                 }
                 let (kind, i) = self.locate(p);
-                if kind != PrimKind::Triangle || b.lane(lane) != self.triangles.get(i) {
+                let (v0, e1, e2) = self.triangles.get(i);
+                if kind != PrimKind::Triangle
+                    || b.lane(lane) != (v0, e1, e2)
+                    || b.normal(lane) != e1.cross(e2)
+                {
                     return Err(format!(
                         "triangle block {k} lane {lane} is not primitive {p}"
                     ));

@@ -2,7 +2,8 @@
 //! a time, 8 children per pass, leaf blocks 4 primitives per pass), for an 8-ray packet, and
 //! for a stream of packets that share one frustum; plus [`Geometry::closest_hit_batch`] and
 //! [`Geometry::occluded_batch`], which pick among them per group of packets by how coherent the
-//! rays are (the rule the wavefront and `whitted bench` use). Planes are tested after the BVH.
+//! rays are and how big the tree is ([`Geometry::choose_path`], the rule the wavefront and
+//! `whitted bench` use). Planes are tested after the BVH.
 //!
 //! Every closest-hit query reports the nearest hit in `(tmin, tmax)`, ties in `t` going to the
 //! smaller geometry index, so single rays, packets and streams give the same `(t, prim)` bit for
@@ -19,8 +20,8 @@ use crate::intersect::{
 use crate::math::{Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::simd::{
-    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, all, any, bitmask, gt, lanes, lt,
-    mask_none, select, select_i32,
+    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, gt, lanes, lt, mask_none,
+    select, select_i32,
 };
 
 /// How a group of packets is traced (see [`Geometry::closest_hit_batch`]).
@@ -34,23 +35,24 @@ pub enum Path {
     Single,
 }
 
-/// The smallest cosine between a group's ray directions and their mean above which the group
-/// counts as coherent (camera rays of a tile: ~0.9999; shadow rays towards a point light from
-/// nearby points: above 0.99; diffuse rays: ~0.3). Measured: PERF.md, "Which path".
-pub const COHERENT_COS: f32 = 0.95;
+/// The smallest cosine between a group's ray directions and their mean at which the group
+/// counts as coherent and is traced as a stream. Camera rays of a 32x2 strip: 1.000; shadow rays
+/// towards a point light: above 0.999; mirror rays off the torus: above 0.96 for 90% of groups;
+/// diffuse rays: about 0. Measured: PERF.md, "Which path a ray takes".
+pub const COHERENT_COS: f32 = 0.9;
 
-/// Which path suits `rays`: the stream when every active direction lies within the cone
-/// [`COHERENT_COS`] around their mean, otherwise single rays.
-pub fn choose_path(rays: &[RayPacket]) -> Path {
+/// Trees with fewer interior nodes than this are small enough that even incoherent packets
+/// share most of the nodes and leaves they visit: their incoherent groups stay packets
+/// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them ray
+/// by ray (torus1m diffuse: single rays 1.3x faster). Measured: PERF.md, "Which path".
+pub const SMALL_TREE_NODES: usize = 1024;
+
+/// The smallest cosine between the active directions of `rays` and their mean (1 when no
+/// lane is active).
+pub fn coherence(rays: &[RayPacket]) -> f32 {
     let mut sum = Vec3x8::zero();
-    let mut n = 0;
     for r in rays {
-        let d = Vec3x8::select(r.active, r.dir, Vec3x8::zero());
-        sum = sum + d;
-        n += bitmask(r.active).count_ones();
-    }
-    if n == 0 {
-        return Path::Packet;
+        sum = sum + Vec3x8::select(r.active, r.dir, Vec3x8::zero());
     }
     let mean = Vec3::new(
         lanes(sum.x).iter().sum(),
@@ -59,12 +61,12 @@ pub fn choose_path(rays: &[RayPacket]) -> Path {
     )
     .normalize_or_zero();
     let m = Vec3x8::splat(mean);
-    let lim = F32x8::splat(COHERENT_COS);
-    let coherent = rays.iter().all(|r| {
-        let cos = r.dir.dot(m) * (F32x8::splat(1.0) / r.dir.length_squared().sqrt());
-        all(!r.active | crate::simd::ge(cos, lim))
-    });
-    if coherent { Path::Stream } else { Path::Single }
+    let mut lowest = F32x8::splat(1.0);
+    for r in rays {
+        let cos = r.dir.dot(m) / r.dir.length_squared().sqrt_lanes();
+        lowest = crate::simd::min(lowest, select(r.active, cos, F32x8::splat(1.0)));
+    }
+    crate::simd::reduce_min(lowest)
 }
 
 impl Geometry {
@@ -162,11 +164,24 @@ impl Geometry {
         }
     }
 
+    /// The path for a group of packets: a stream when their directions are coherent
+    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and single
+    /// rays in a big one.
+    pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
+        if coherence(rays) >= COHERENT_COS {
+            Path::Stream
+        } else if self.bvh.nodes.len() < SMALL_TREE_NODES {
+            Path::Packet
+        } else {
+            Path::Single
+        }
+    }
+
     /// Closest hits of any number of packets, each group of [`MAX_STREAM`] traced by the path
-    /// [`choose_path`] picks for it.
+    /// [`Geometry::choose_path`] picks for it.
     pub fn closest_hit_batch(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
         for (r, h) in rays.chunks(MAX_STREAM).zip(hits.chunks_mut(MAX_STREAM)) {
-            self.closest_hit_path(choose_path(r), r, h);
+            self.closest_hit_path(self.choose_path(r), r, h);
         }
     }
 
@@ -246,14 +261,14 @@ impl Geometry {
     }
 
     /// Occlusion of any number of packets, each group of [`MAX_STREAM`] traced by the path
-    /// [`choose_path`] picks for it.
+    /// [`Geometry::choose_path`] picks for it.
     pub fn occluded_batch(&self, rays: &[RayPacket], tmax: &[F32x8], occluded: &mut [Mask]) {
         let groups = rays
             .chunks(MAX_STREAM)
             .zip(tmax.chunks(MAX_STREAM))
             .zip(occluded.chunks_mut(MAX_STREAM));
         for ((r, t), o) in groups {
-            self.occluded_path(choose_path(r), r, t, o);
+            self.occluded_path(self.choose_path(r), r, t, o);
         }
     }
 
