@@ -22,11 +22,13 @@
 
 pub mod arena;
 pub mod build;
+mod interleave;
 mod packet;
 mod single;
 mod stack;
 mod stream;
 
+pub use interleave::IN_FLIGHT;
 pub use packet::PACKET_STACK_DEPTH;
 pub use stream::{MAX_STREAM, StreamMasks};
 

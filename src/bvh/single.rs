@@ -9,7 +9,7 @@ use crate::simd::{F32x8, bitmask, le, max, min};
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
 /// than it pops.
-const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
+pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 
 /// One ray prepared for 8-wide box tests: splatted origin and reciprocal direction, and the
 /// box planes it enters (`near`) and leaves (`far`) through on each axis.
@@ -76,60 +76,70 @@ impl Bvh8 {
         let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
         let mut cur = self.root;
         loop {
-            if !cur.is_leaf() {
-                let n = &self.nodes[cur.index()];
-                let (mask, near) = r.test(n, tmin8, F32x8::splat(*tmax));
-                if mask != 0 {
-                    let c0 = mask.trailing_zeros() as usize;
-                    let rest = mask & (mask - 1);
-                    if rest == 0 {
-                        cur = n.child[c0];
-                        continue;
-                    }
-                    let near = near.to_array();
-                    let c1 = rest.trailing_zeros() as usize;
-                    let rest = rest & (rest - 1);
-                    if rest == 0 {
-                        // two: the farther waits on the stack
-                        let (a, b) = ((n.child[c0], near[c0]), (n.child[c1], near[c1]));
-                        let (first, second) = if a.1 <= b.1 { (a, b) } else { (b, a) };
-                        stack.push(second);
-                        cur = first.0;
-                        continue;
-                    }
-                    // three or more: sort them farthest first, push all but the nearest
-                    let mut hits = [(NodeRef::EMPTY, 0.0f32); WIDTH];
-                    hits[0] = (n.child[c0], near[c0]);
-                    hits[1] = (n.child[c1], near[c1]);
-                    let mut count = 2;
-                    let mut m = rest;
-                    while m != 0 {
-                        let j = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        hits[count] = (n.child[j], near[j]);
-                        count += 1;
-                    }
-                    sort_farthest_first(&mut hits[..count]);
-                    for h in &hits[..count - 1] {
-                        stack.push(*h);
-                    }
-                    cur = hits[count - 1].0;
-                    continue;
-                }
-            } else {
+            let next = if cur.is_leaf() {
                 leaf(cur.as_leaf(), tmax);
-            }
-            loop {
-                match stack.pop() {
+                None
+            } else {
+                self.descend(&r, &self.nodes[cur.index()], tmin8, *tmax, &mut stack)
+            };
+            cur = match next {
+                Some(c) => c,
+                None => match pop_nearer(&mut stack, *tmax) {
+                    Some(c) => c,
                     None => return,
-                    Some((c, near)) if near <= widen(*tmax) => {
-                        cur = c;
-                        break;
-                    }
-                    Some(_) => {}
-                }
-            }
+                },
+            };
         }
+    }
+
+    /// One step down from interior node `n` for a closest-hit walk: the nearest child the ray
+    /// enters before `tmax`, the other entered children pushed farthest first; `None` when it
+    /// enters none.
+    #[inline(always)]
+    pub(super) fn descend(
+        &self,
+        r: &Ray1,
+        n: &Node8,
+        tmin8: F32x8,
+        tmax: f32,
+        stack: &mut Stack<(NodeRef, f32), STACK>,
+    ) -> Option<NodeRef> {
+        let (mask, near) = r.test(n, tmin8, F32x8::splat(tmax));
+        if mask == 0 {
+            return None;
+        }
+        let c0 = mask.trailing_zeros() as usize;
+        let rest = mask & (mask - 1);
+        if rest == 0 {
+            return Some(n.child[c0]);
+        }
+        let near = near.to_array();
+        let c1 = rest.trailing_zeros() as usize;
+        let rest = rest & (rest - 1);
+        if rest == 0 {
+            // two: the farther waits on the stack
+            let (a, b) = ((n.child[c0], near[c0]), (n.child[c1], near[c1]));
+            let (first, second) = if a.1 <= b.1 { (a, b) } else { (b, a) };
+            stack.push(second);
+            return Some(first.0);
+        }
+        // three or more: sort them farthest first, push all but the nearest
+        let mut hits = [(NodeRef::EMPTY, 0.0f32); WIDTH];
+        hits[0] = (n.child[c0], near[c0]);
+        hits[1] = (n.child[c1], near[c1]);
+        let mut count = 2;
+        let mut m = rest;
+        while m != 0 {
+            let j = m.trailing_zeros() as usize;
+            m &= m - 1;
+            hits[count] = (n.child[j], near[j]);
+            count += 1;
+        }
+        sort_farthest_first(&mut hits[..count]);
+        for h in &hits[..count - 1] {
+            stack.push(*h);
+        }
+        Some(hits[count - 1].0)
     }
 
     /// Single-ray any hit: true as soon as `leaf(leaf)` reports a blocker before `tmax`.
@@ -172,6 +182,18 @@ impl Bvh8 {
                 Some(c) => cur = c,
                 None => return false,
             }
+        }
+    }
+}
+
+/// Pops entries until one the ray may still enter before `tmax`.
+#[inline(always)]
+pub(super) fn pop_nearer(stack: &mut Stack<(NodeRef, f32), STACK>, tmax: f32) -> Option<NodeRef> {
+    loop {
+        match stack.pop() {
+            None => return None,
+            Some((c, near)) if near <= widen(tmax) => return Some(c),
+            Some(_) => {}
         }
     }
 }

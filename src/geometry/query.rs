@@ -194,21 +194,67 @@ impl Geometry {
                     self.closest_hit_packet(r, h);
                 }
             }
-            Path::Single => {
-                for (r, h) in rays.iter().zip(hits) {
-                    let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
-                    let tmin = lanes(r.tmin);
-                    let active = bitmask(r.active);
-                    for l in 0..LANES {
-                        if active >> l & 1 == 1 {
-                            if let Some((tt, p)) = self.closest_hit(&r.ray(l), tmin[l], t[l]) {
-                                (t[l], prim[l]) = (tt, p as i32);
-                            }
-                        }
-                    }
-                    (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
+            Path::Single => self.closest_hit_singles(rays, hits),
+        }
+    }
+
+    /// Closest hits of up to [`MAX_STREAM`] packets ray by ray, several walks interleaved
+    /// ([`crate::bvh::Bvh8::closest_many`]); the same answers as [`Geometry::closest_hit`].
+    fn closest_hit_singles(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        const N: usize = MAX_STREAM * LANES;
+        let mut list = [(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0f32); N];
+        let mut best = [Best { t: 0.0, prim: -1 }; N];
+        let mut slot = [(0u8, 0u8); N];
+        let mut n = 0;
+        for (p, (r, h)) in rays.iter().zip(hits.iter()).enumerate() {
+            let (ts, prims, tmin) = (lanes(h.t), crate::simd::lanes_i32(h.prim), lanes(r.tmin));
+            let active = bitmask(r.active);
+            for l in 0..LANES {
+                if active >> l & 1 == 1 {
+                    list[n] = (r.ray(l), tmin[l]);
+                    best[n] = Best {
+                        t: ts[l],
+                        prim: prims[l],
+                    };
+                    slot[n] = (p as u8, l as u8);
+                    n += 1;
                 }
             }
+        }
+        if self.bvh.is_empty() {
+            for ((ray, tmin), b) in list[..n].iter().zip(&mut best) {
+                self.closest_brute(ray, *tmin, b);
+            }
+        } else {
+            let start: [f32; N] = std::array::from_fn(|i| best[i].t);
+            self.bvh.closest_many(
+                n,
+                |i| (list[i].0, list[i].1, start[i]),
+                |i, leaf, tmax| {
+                    self.closest_leaf(leaf, &list[i].0, list[i].1, &mut best[i]);
+                    *tmax = best[i].t;
+                },
+            );
+        }
+        let base = self.base(PrimKind::Plane) as i32;
+        for ((ray, tmin), b) in list[..n].iter().zip(&mut best) {
+            for i in self.planes_range() {
+                let (pn, d) = (self.planes.normal(i), self.planes.offset[i]);
+                if let Some(t) = intersect_plane(pn, d, ray, *tmin, f32::INFINITY) {
+                    b.take(t, base + i as i32);
+                }
+            }
+        }
+        let mut t: [[f32; LANES]; MAX_STREAM] =
+            std::array::from_fn(|p| lanes(hits.get(p).map_or(F32x8::ZERO, |h| h.t)));
+        let mut prim: [[i32; LANES]; MAX_STREAM] = std::array::from_fn(|p| {
+            crate::simd::lanes_i32(hits.get(p).map_or(I32x8::ZERO, |h| h.prim))
+        });
+        for (k, &(p, l)) in slot[..n].iter().enumerate() {
+            (t[p as usize][l as usize], prim[p as usize][l as usize]) = (best[k].t, best[k].prim);
+        }
+        for (p, h) in hits.iter_mut().enumerate() {
+            (h.t, h.prim) = (F32x8::new(t[p]), I32x8::new(prim[p]));
         }
     }
 
