@@ -55,7 +55,22 @@ impl Packet8 {
     /// (the single-ray test's arithmetic, lane by lane).
     #[inline(always)]
     pub(super) fn test(&self, n: &Node8, i: usize, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
-        let plane = |k: usize| F32x8::splat(n.bounds[k].as_array()[i]);
+        self.test_planes(|k| n.bounds[k].as_array()[i], tmin, tmax)
+    }
+
+    /// [`Packet8::test`] for a box given as an [`Aabb`].
+    #[inline(always)]
+    pub(super) fn test_box(&self, b: &super::Aabb, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
+        self.test_planes(
+            |k| if k < HI { b.min[k - LO] } else { b.max[k - HI] },
+            tmin,
+            tmax,
+        )
+    }
+
+    #[inline(always)]
+    fn test_planes(&self, p: impl Fn(usize) -> f32, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
+        let plane = |k: usize| F32x8::splat(p(k));
         let slab = |axis: usize, o: F32x8, inv: F32x8| {
             let a = (plane(LO + axis) - o) * inv;
             let b = (plane(HI + axis) - o) * inv;
@@ -265,18 +280,24 @@ impl Bvh8 {
         if self.is_empty() || !any(rays.active) {
             return;
         }
-        if self.root.is_leaf() {
-            probe.node(rays.active);
-            leaf(self.root.as_leaf(), rays, rays.active, tmax);
+        let p = Packet8::new(rays);
+        // the lanes that enter the tree's box (the heatmap counts the root for them only)
+        let (enter, near) = p.test_box(&self.bounds, rays.tmin, *tmax);
+        let enter = enter & rays.active;
+        if !any(enter) {
             return;
         }
-        let p = Packet8::new(rays);
+        if self.root.is_leaf() {
+            probe.node(enter);
+            leaf(self.root.as_leaf(), rays, enter, tmax);
+            return;
+        }
         let frustum = Frustum::new(std::iter::once((&p, rays.active, rays.tmin)));
         let mut stack: Stack<Pending, PACKET_STACK_DEPTH> = Stack::new();
         stack.push(Pending {
             node: self.root,
-            lanes: rays.active,
-            near: rays.tmin,
+            lanes: enter,
+            near,
         });
         let mut hits = [HitChild {
             node: NodeRef::EMPTY,
