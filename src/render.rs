@@ -75,7 +75,8 @@ fn render_scene(
         Tracer::Reference => pool.install(|| render_reference(scene, opts, progress)),
         Tracer::Packet => {
             let t0 = Instant::now();
-            let geometry = Geometry::from_scene(scene);
+            // on the render's threads: the BVH build is parallel
+            let geometry = pool.install(|| Geometry::from_scene(scene));
             let accel = AccelStats {
                 build: t0.elapsed(),
                 nodes: geometry.bvh().nodes.len(),
@@ -97,7 +98,7 @@ pub fn eye_ray_costs(scene: &Scene, opts: &RenderOptions, progress: Progress) ->
         .num_threads(opts.threads)
         .build()
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
-    let geometry = Geometry::from_scene(scene);
+    let geometry = pool.install(|| Geometry::from_scene(scene));
     Ok(pool.install(|| crate::wavefront::eye_ray_costs(scene, &geometry, opts, progress)))
 }
 

@@ -215,6 +215,20 @@ pub fn max(a: F32x8, b: F32x8) -> F32x8 {
     a.fast_max(b)
 }
 
+/// Asks the processor to fetch the cache line at `p` into all cache levels (a hint: no effect
+/// on results).
+#[inline(always)]
+pub fn prefetch<T>(p: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        // SAFETY: prefetching never faults, whatever the address.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>((p as *const T).cast()) };
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// The smallest lane (for lanes without NaN).
 #[inline(always)]
 pub fn reduce_min(a: F32x8) -> f32 {
