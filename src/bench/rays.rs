@@ -82,6 +82,14 @@ pub struct SecondaryQueues {
     pub diffuse: RayQueue,
 }
 
+/// The kinds of secondary ray.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Secondary {
+    Shadow,
+    Mirror,
+    Diffuse,
+}
+
 /// The secondary rays of the primary hits `hits` (one per packet of `primary.packets()`):
 /// origin `P = o + t d + 1e-4 N` with `N` the unit geometric normal facing the incoming ray.
 pub fn generate_secondary_rays(
@@ -89,7 +97,26 @@ pub fn generate_secondary_rays(
     primary: &RayQueue,
     hits: &[HitPacket],
 ) -> SecondaryQueues {
-    let mut q = SecondaryQueues::default();
+    let queue = |kind| secondary_rays(geometry, primary, hits, kind);
+    SecondaryQueues {
+        shadow: queue(Secondary::Shadow),
+        mirror: queue(Secondary::Mirror),
+        diffuse: queue(Secondary::Diffuse),
+    }
+}
+
+/// One queue of [`generate_secondary_rays`] alone (the benchmark builds one at a time, so
+/// only one is in memory).
+pub fn secondary_rays(
+    geometry: &Geometry,
+    primary: &RayQueue,
+    hits: &[HitPacket],
+    kind: Secondary,
+) -> RayQueue {
+    let count = (0..primary.len())
+        .filter(|&k| hits[k / LANES].lane(k % LANES).is_some())
+        .count();
+    let mut q = RayQueue::with_capacity(count);
     for (k, item) in primary.items.iter().enumerate() {
         let Some((t, prim)) = hits[k / LANES].lane(k % LANES) else {
             continue;
@@ -100,17 +127,24 @@ pub fn generate_secondary_rays(
             n = -n;
         }
         let p = o + d * t + n * SURFACE_EPSILON;
-        // shadow: to the light, stopping 1e-4 of the distance short of it
-        let to_light = LIGHT - p;
-        let dist = to_light.dot(to_light).sqrt();
-        let shadow_dir = to_light * (1.0 / dist);
-        q.shadow.push(Ray::new(p, shadow_dir), dist * (1.0 - 1e-4));
-        // mirror
-        let mirror_dir = d - n * (2.0 * d.dot(n));
-        q.mirror.push(Ray::new(p, mirror_dir), f32::INFINITY);
-        // diffuse: cosine-weighted, seeded by the queue index
-        let diffuse_dir = cosine_direction(n, q.diffuse.len() as u32);
-        q.diffuse.push(Ray::new(p, diffuse_dir), f32::INFINITY);
+        match kind {
+            Secondary::Shadow => {
+                // to the light, stopping 1e-4 of the distance short of it
+                let to_light = LIGHT - p;
+                let dist = to_light.dot(to_light).sqrt();
+                let shadow_dir = to_light * (1.0 / dist);
+                q.push(Ray::new(p, shadow_dir), dist * (1.0 - 1e-4));
+            }
+            Secondary::Mirror => {
+                let mirror_dir = d - n * (2.0 * d.dot(n));
+                q.push(Ray::new(p, mirror_dir), f32::INFINITY);
+            }
+            Secondary::Diffuse => {
+                // cosine-weighted, seeded by the queue index
+                let diffuse_dir = cosine_direction(n, q.len() as u32);
+                q.push(Ray::new(p, diffuse_dir), f32::INFINITY);
+            }
+        }
     }
     q
 }
