@@ -390,7 +390,8 @@ fn flatten(obj: &Object, m: &Mat4, n: &Mat3, identity: bool, g: &mut Geometry) {
             }
         }
         Object::Triangle { v, material, id } => {
-            push_triangle(g, v, m, identity, &normal, *material, *id)
+            let (world, normal) = world_triangle(v, m, n, identity);
+            g.triangles.push(world, normal, *material, *id);
         }
         Object::Mesh {
             triangles,
@@ -398,17 +399,18 @@ fn flatten(obj: &Object, m: &Mat4, n: &Mat3, identity: bool, g: &mut Geometry) {
             material,
             first_id,
         } => {
-            for (k, v) in triangles.iter().enumerate() {
-                let id = first_id + k as u32;
-                push_triangle(g, v, m, identity, &normal, *material, id);
-                if let Some(corners) = normals.get(k) {
-                    let world = if identity {
-                        *corners
-                    } else {
-                        corners.map(|c| *n * c)
-                    };
-                    g.corner_normals.push(id, world);
-                }
+            // big meshes transform in parallel (no serial pass over a million triangles)
+            g.triangles.extend_with(triangles.len(), |k| {
+                let (world, normal) = world_triangle(&triangles[k], m, n, identity);
+                (world, normal, *material, first_id + k as u32)
+            });
+            for (k, corners) in normals.iter().enumerate() {
+                let world = if identity {
+                    *corners
+                } else {
+                    corners.map(|c| *n * c)
+                };
+                g.corner_normals.push(first_id + k as u32, world);
             }
         }
         Object::Group(children) => {
@@ -428,20 +430,13 @@ fn flatten(obj: &Object, m: &Mat4, n: &Mat3, identity: bool, g: &mut Geometry) {
     }
 }
 
-fn push_triangle(
-    g: &mut Geometry,
-    v: &[Vec3; 3],
-    m: &Mat4,
-    identity: bool,
-    normal: &dyn Fn(Vec3) -> Vec3,
-    material: u32,
-    id: u32,
-) {
+/// A triangle in world space and its unit normal (by the normal matrix `n`).
+#[inline]
+fn world_triangle(v: &[Vec3; 3], m: &Mat4, n: &Mat3, identity: bool) -> ([Vec3; 3], Vec3) {
     let n_obj = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-    let world = if identity {
-        *v
+    if identity {
+        (*v, n_obj)
     } else {
-        v.map(|p| m.transform_point3(p))
-    };
-    g.triangles.push(world, normal(n_obj), material, id);
+        (v.map(|p| m.transform_point3(p)), (*n * n_obj).normalize())
+    }
 }

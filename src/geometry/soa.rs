@@ -4,6 +4,8 @@
 //! the unit sphere (with its transpose for normals). Every kind also keeps, per primitive, its
 //! material index and its scene id (see [`crate::scene::Object`]).
 
+use rayon::prelude::*;
+
 use crate::math::Vec3;
 
 /// Spheres: centre and radius squared.
@@ -100,6 +102,97 @@ impl TriangleSoa {
         self.nz.push(n.z);
         self.material.push(material);
         self.id.push(id);
+    }
+
+    /// Appends `n` triangles, triangle `k` being `f(k)`: `(vertices, unit normal, material,
+    /// id)`, as [`TriangleSoa::push`] would one by one. Big batches (a mesh of a million
+    /// triangles) are computed and written in parallel, straight into the columns.
+    pub fn extend_with(
+        &mut self,
+        n: usize,
+        f: impl Fn(usize) -> ([Vec3; 3], Vec3, u32, u32) + Sync,
+    ) {
+        const PARALLEL: usize = 1 << 14;
+        if n < PARALLEL {
+            for k in 0..n {
+                let (v, normal, material, id) = f(k);
+                self.push(v, normal, material, id);
+            }
+            return;
+        }
+        let floats = [
+            &mut self.v0x,
+            &mut self.v0y,
+            &mut self.v0z,
+            &mut self.e1x,
+            &mut self.e1y,
+            &mut self.e1z,
+            &mut self.e2x,
+            &mut self.e2y,
+            &mut self.e2z,
+            &mut self.nx,
+            &mut self.ny,
+            &mut self.nz,
+        ];
+        let len = self.material.len();
+        let mut float_chunks: Vec<_> = floats
+            .into_iter()
+            .map(|c| {
+                c.reserve(n);
+                c.spare_capacity_mut()[..n].chunks_mut(PARALLEL)
+            })
+            .collect();
+        self.material.reserve(n);
+        self.id.reserve(n);
+        let mut material_chunks = self.material.spare_capacity_mut()[..n].chunks_mut(PARALLEL);
+        let mut id_chunks = self.id.spare_capacity_mut()[..n].chunks_mut(PARALLEL);
+        // one job per chunk of PARALLEL triangles: its slice of every column
+        let jobs: Vec<_> = (0..n.div_ceil(PARALLEL))
+            .map(|j| {
+                let floats: Vec<_> = float_chunks.iter_mut().map(|c| c.next().unwrap()).collect();
+                let (m, i) = (material_chunks.next().unwrap(), id_chunks.next().unwrap());
+                (j * PARALLEL, floats, m, i)
+            })
+            .collect();
+        jobs.into_par_iter()
+            .for_each(|(first, mut floats, materials, ids)| {
+                for k in 0..materials.len() {
+                    let (v, normal, material, id) = f(first + k);
+                    let (e1, e2) = (v[1] - v[0], v[2] - v[0]);
+                    let values = [
+                        v[0].x, v[0].y, v[0].z, e1.x, e1.y, e1.z, e2.x, e2.y, e2.z, normal.x,
+                        normal.y, normal.z,
+                    ];
+                    for (col, value) in floats.iter_mut().zip(values) {
+                        col[k].write(value);
+                    }
+                    materials[k].write(material);
+                    ids[k].write(id);
+                }
+            });
+        for col in [
+            &mut self.v0x,
+            &mut self.v0y,
+            &mut self.v0z,
+            &mut self.e1x,
+            &mut self.e1y,
+            &mut self.e1z,
+            &mut self.e2x,
+            &mut self.e2y,
+            &mut self.e2z,
+            &mut self.nx,
+            &mut self.ny,
+            &mut self.nz,
+        ] {
+            // SAFETY: the parallel pass above wrote the first `n` spare slots of every column
+            // (its chunks cover 0..n exactly once).
+            unsafe { col.set_len(len + n) };
+        }
+        // SAFETY: as above, for the two integer columns.
+        unsafe {
+            self.material.set_len(len + n);
+            self.id.set_len(len + n);
+        }
     }
 
     /// The number of triangles.
@@ -243,4 +336,29 @@ impl TransformedSphereSoa {
 fn permute<T: Copy>(col: &mut Vec<T>, order: &[u32]) {
     let old = std::mem::take(col);
     *col = order.iter().map(|&i| old[i as usize]).collect();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extend_with_equals_pushes_in_order_for_small_and_big_batches() {
+        for n in [0, 5, 1 << 14, (1 << 14) * 3 + 17] {
+            let tri = |k: usize| {
+                let a = Vec3::new(k as f32, (k % 7) as f32, 0.5);
+                let v = [a, a + Vec3::X, a + Vec3::new(0.25, 1.0, (k % 3) as f32)];
+                (v, Vec3::new(0.0, 0.6, 0.8), (k % 5) as u32, 1000 + k as u32)
+            };
+            let mut pushed = TriangleSoa::default();
+            pushed.push([Vec3::ZERO, Vec3::X, Vec3::Y], Vec3::Z, 9, 9);
+            let mut extended = pushed.clone();
+            for k in 0..n {
+                let (v, normal, m, id) = tri(k);
+                pushed.push(v, normal, m, id);
+            }
+            extended.extend_with(n, tri);
+            assert_eq!(extended, pushed, "{n} triangles");
+        }
+    }
 }
