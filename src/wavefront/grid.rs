@@ -37,15 +37,7 @@ pub fn render_grid_packet(
         .enumerate()
         .map_init(Bump::new, |arena, (i, ((color, depth), normal))| {
             arena.reset();
-            let y0 = i as u32 * BAND_ROWS;
-            let band = Band {
-                x0: 0,
-                y0,
-                width: w,
-                rows: BAND_ROWS.min(h - y0),
-                image_width: w,
-                image_height: h,
-            };
+            let band = Band::of_image(i as u32, w, h);
             let mut rays = RayQueue::with_capacity_in((band.width * band.rows) as usize, arena);
             stages::generate_camera_rays(&scene.camera, band, &mut rays);
             for k in 0..rays.len() {

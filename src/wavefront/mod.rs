@@ -102,6 +102,20 @@ pub struct Band {
 }
 
 impl Band {
+    /// Band `index` of a `width` x `height` image cut into whole-width bands of [`BAND_ROWS`]
+    /// rows (the last one shorter).
+    pub fn of_image(index: u32, width: u32, height: u32) -> Band {
+        let y0 = index * BAND_ROWS;
+        Band {
+            x0: 0,
+            y0,
+            width,
+            rows: BAND_ROWS.min(height - y0),
+            image_width: width,
+            image_height: height,
+        }
+    }
+
     /// Its camera samples: one per pixel, at the centre.
     pub fn samples(&self) -> CameraSamples<'static> {
         CameraSamples {
