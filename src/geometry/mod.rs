@@ -1,7 +1,7 @@
 //! The packet tracer's view of a scene: every primitive flattened to world space and stored
 //! structure of arrays ([`soa`]), an 8-wide BVH over the bounded ones whose leaves are blocks of
 //! primitives stored ready for intersection ([`blocks`]), and closest-hit and any-hit queries
-//! for single rays, 8-ray packets and streams of packets ([`query`]). Flattening bakes
+//! for single rays, 8-ray packets and streams of packets (`query.rs`). Flattening bakes
 //! transforms: triangles and planes to world space, spheres under similarity transforms to
 //! world-space spheres, and other spheres kept as transformed spheres (inverse affine to the
 //! unit sphere, normals by the inverse transpose).
