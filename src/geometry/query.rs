@@ -93,7 +93,7 @@ impl Geometry {
                 best.take(t, base + i as i32);
             }
         }
-        (best.prim >= 0).then(|| (best.t, best.prim as u32))
+        (best.prim >= 0).then_some((best.t, best.prim as u32))
     }
 
     /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
