@@ -11,6 +11,10 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use whitted::cli::parse_args;
 use whitted::{RenderOptions, Scene, Tracer, render};
 
+/// The allocator of the `whitted` binary (huge pages for big blocks), so the figures match it.
+#[global_allocator]
+static ALLOCATOR: whitted::hugepages::HugePages = whitted::hugepages::HugePages;
+
 const SIZE: u32 = 128;
 
 /// A scene file and the options to render it with.

@@ -16,6 +16,10 @@ use whitted::bench::{
 use whitted::geometry::Geometry;
 use whitted::simd::mask_none;
 
+/// The allocator of the `whitted` binary (huge pages for big blocks), so the figures match it.
+#[global_allocator]
+static ALLOCATOR: whitted::hugepages::HugePages = whitted::hugepages::HugePages;
+
 const WIDTH: u32 = 512;
 const HEIGHT: u32 = 512;
 

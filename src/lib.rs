@@ -66,7 +66,8 @@
 //! cycle):
 //!
 //! ```text
-//! leaves       error, math, simd (the only file naming `wide`), progress, filter, sampler
+//! leaves       error, math, simd (the only file naming `wide`), progress, filter, sampler,
+//!              hugepages (the binary's allocator: huge pages for big blocks)
 //! data         packet (8-ray SoA), scene (parsed tree, cameras, textures)
 //! kernels      intersect (Hit and the primitive tests), bvh (knows no primitive)
 //! shared       shade, raytree, stats, options, frame, film (samples to pixels),
@@ -98,6 +99,8 @@ pub mod geometry;
 #[doc(hidden)]
 pub mod grid;
 pub mod heatmap;
+#[doc(hidden)]
+pub mod hugepages;
 #[doc(hidden)]
 pub mod intersect;
 pub mod math;

@@ -1,6 +1,12 @@
-//! The `whitted` binary: checks the CPU, calls [`whitted::cli::run`], maps errors to exit code 2.
+//! The `whitted` binary: checks the CPU, calls [`whitted::cli::run`], maps errors to exit code 2;
+//! its allocator asks for huge pages on big blocks ([`whitted::hugepages`]).
 
 use std::process::ExitCode;
+
+/// Big blocks (the BVH, leaf blocks, SoA arrays, queues) on transparent huge pages where Linux
+/// offers them on request (`whitted::hugepages`).
+#[global_allocator]
+static ALLOCATOR: whitted::hugepages::HugePages = whitted::hugepages::HugePages;
 
 fn main() -> ExitCode {
     if !whitted::cpu_supported() {
