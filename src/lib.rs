@@ -79,10 +79,10 @@
 //! commands     bench, cli (main.rs calls cli::run)
 //! ```
 //!
-//! The public API is [`Scene`], [`render()`](render::render), [`RenderOptions`], [`Frame`], [`merge`],
-//! [`output`], [`raytree`] and [`Error`]. The other modules are public only so that the
-//! benchmarks, fuzz targets and tests can reach the kernels; they are hidden from the docs and
-//! not a stable interface. `main.rs` is a thin wrapper around `cli::run`.
+//! The public API is [`Scene`], [`render()`](render::render), [`RenderOptions`], [`Frame`],
+//! [`merge`], [`output`], [`raytree`], [`hugepages`] (the binary's allocator) and [`Error`]. The
+//! other modules are public only so that the benchmarks, fuzz targets and tests can reach the
+//! kernels; they are hidden from the docs and not a stable interface. `main.rs` is a thin wrapper around `cli::run`.
 
 #[doc(hidden)]
 pub mod bench;
@@ -99,7 +99,6 @@ pub mod geometry;
 #[doc(hidden)]
 pub mod grid;
 pub mod heatmap;
-#[doc(hidden)]
 pub mod hugepages;
 #[doc(hidden)]
 pub mod intersect;
