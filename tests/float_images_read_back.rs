@@ -99,7 +99,7 @@ fn exr_read_by_openexr_holds_the_linear_values_and_the_place_of_the_crop() {
         let print = RenderFingerprint::new(&scene, &opts);
         for kind in KINDS {
             let path = dir.join(format!("{kind:?}.exr").replace([' ', '{', '}', ':', ','], ""));
-            output::write_frame(&frame, kind, &path, &print.of(kind)).unwrap();
+            output::write_frame(&frame, kind, &path, &print).unwrap();
             let (data, display, names, values) = read_with_openexr(&path);
             let win = frame.window;
             assert_eq!(
@@ -152,7 +152,7 @@ fn pfm_read_by_zune_ppm_holds_the_linear_values() {
     let print = RenderFingerprint::new(&scene, &opts);
     for kind in KINDS {
         let path = dir.join("image.pfm");
-        output::write_frame(&frame, kind, &path, &print.of(kind)).unwrap();
+        output::write_frame(&frame, kind, &path, &print).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         // zune-ppm 0.5 skips every whitespace byte after the header's scale, where PFM has
         // exactly one, so it misreads an image whose first sample starts with such a byte; and it
@@ -192,7 +192,7 @@ fn hdr_read_by_zune_hdr_holds_the_values_to_rgbe_precision() {
     let print = RenderFingerprint::new(&scene, &opts);
     for kind in KINDS {
         let path = dir.join("image.hdr");
-        output::write_frame(&frame, kind, &path, &print.of(kind)).unwrap();
+        output::write_frame(&frame, kind, &path, &print).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let mut decoder = zune_hdr::HdrDecoder::new(ZCursor::new(&bytes[..]));
         let values = decoder.decode().unwrap();

@@ -304,27 +304,22 @@ pub type FileBytes = (PathBuf, Vec<u8>);
 /// The files that hold the `kind` image of `frame` at `path`, in the format its extension
 /// names: the image, preceded by its sidecar ([`piece`]) when the frame is a piece of a larger
 /// image in a format that cannot record its place itself. An EXR records its place and
-/// `fingerprint` in itself.
+/// fingerprint in itself. The fingerprint is hashed only for a file that records it.
 pub fn frame_files(
     frame: &Frame,
     kind: ImageKind,
     path: &Path,
-    fingerprint: &str,
+    print: &piece::RenderFingerprint<'_>,
 ) -> Result<Vec<FileBytes>> {
     let format = Format::for_path(path)?;
     let place = Place::of(frame);
-    let bytes = encode_raster(
-        &frame_raster(frame, kind, format),
-        format,
-        &place,
-        Some(fingerprint),
-    )?;
+    let raster = frame_raster(frame, kind, format);
+    let sidecar = !format.records_its_place() && !place.is_whole();
+    let fingerprint = (sidecar || format.records_its_place()).then(|| print.of(kind));
+    let bytes = encode_raster(&raster, format, &place, fingerprint.as_deref())?;
     let mut files = Vec::with_capacity(2);
-    if !format.records_its_place() && !place.is_whole() {
-        let text = piece::sidecar_text(&piece::Piece {
-            fingerprint: fingerprint.to_string(),
-            place,
-        });
+    if let (true, Some(fingerprint)) = (sidecar, fingerprint) {
+        let text = piece::sidecar_text(&piece::Piece { fingerprint, place });
         files.push((piece::sidecar_path(path), text.into_bytes()));
     }
     files.push((path.to_path_buf(), bytes));
@@ -351,8 +346,13 @@ pub fn write_files(files: &[FileBytes]) -> Result<()> {
 }
 
 /// Writes the `kind` image of `frame` to `path` ([`frame_files`], [`write_files`]).
-pub fn write_frame(frame: &Frame, kind: ImageKind, path: &Path, fingerprint: &str) -> Result<()> {
-    write_files(&frame_files(frame, kind, path, fingerprint)?)
+pub fn write_frame(
+    frame: &Frame,
+    kind: ImageKind,
+    path: &Path,
+    print: &piece::RenderFingerprint<'_>,
+) -> Result<()> {
+    write_files(&frame_files(frame, kind, path, print)?)
 }
 
 /// Checks, before a render starts, that `path` has a known extension, fits the format, and lies

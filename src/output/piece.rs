@@ -145,13 +145,41 @@ impl std::fmt::Write for Fnv1a {
 }
 
 /// The hash of a render (whitted's version, the scene, the options that decide pixels), from
-/// which each of its images' fingerprints follows.
-#[derive(Clone, Copy)]
-pub struct RenderFingerprint(Fnv1a);
+/// which each of its images' fingerprints follows. It is computed when first asked for: hashing
+/// a big scene takes a while (about 0.9 s for a million triangles, on one thread), and only a
+/// piece or an EXR file records a fingerprint.
+pub struct RenderFingerprint<'a> {
+    scene: &'a Scene,
+    opts: &'a RenderOptions,
+    hash: std::cell::OnceCell<Fnv1a>,
+}
 
-impl RenderFingerprint {
-    /// Hashes `scene` rendered with `opts`.
-    pub fn new(scene: &Scene, opts: &RenderOptions) -> RenderFingerprint {
+impl<'a> RenderFingerprint<'a> {
+    /// The fingerprint of `scene` rendered with `opts` (not hashed yet).
+    pub fn new(scene: &'a Scene, opts: &'a RenderOptions) -> RenderFingerprint<'a> {
+        RenderFingerprint {
+            scene,
+            opts,
+            hash: std::cell::OnceCell::new(),
+        }
+    }
+
+    /// Hashes the scene and the options.
+    fn hash(&self) -> Fnv1a {
+        *self.hash.get_or_init(|| hash_render(self.scene, self.opts))
+    }
+
+    /// The fingerprint of the render's `kind` image: 16 hex digits.
+    pub fn of(&self, kind: ImageKind) -> String {
+        let mut h = self.hash();
+        let _ = write!(h, "{kind:?}");
+        format!("{:016x}", h.0)
+    }
+}
+
+/// The hash of `scene` rendered with `opts`.
+fn hash_render(scene: &Scene, opts: &RenderOptions) -> Fnv1a {
+    {
         // What does not decide pixels is left out: the crop, threads, limits, which images
         // the frame keeps besides colour.
         let pixels = RenderOptions {
@@ -171,14 +199,7 @@ impl RenderFingerprint {
             "whitted {}\n{scene:?}\n{pixels:?}\n",
             env!("CARGO_PKG_VERSION")
         );
-        RenderFingerprint(h)
-    }
-
-    /// The fingerprint of the render's `kind` image: 16 hex digits.
-    pub fn of(&self, kind: ImageKind) -> String {
-        let mut h = self.0;
-        let _ = write!(h, "{kind:?}");
-        format!("{:016x}", h.0)
+        h
     }
 }
 
