@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use super::render_options::Command;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::heatmap;
 use crate::options::{self, RenderOptions};
 use crate::output::{self, ImageKind, piece::RenderFingerprint};
@@ -64,7 +64,13 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     }
     let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
-    let mut scene = Scene::load(&cmd.scene)?;
+    // The OBJ loader reads big meshes in parallel: on the render's threads.
+    let loader = rayon::ThreadPoolBuilder::new()
+        .num_threads(cmd.render.threads)
+        .build()
+        .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
+    let mut scene = loader.install(|| Scene::load(&cmd.scene))?;
+    drop(loader);
     if cmd.smooth_normals {
         scene.smooth_normals();
     }
@@ -107,7 +113,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             cmd.normals.as_ref().map(|p| (ImageKind::Normals, p)),
         ];
         for (kind, path) in images.into_iter().flatten() {
-            files.extend(output::frame_files(&frame, kind, path, &print.of(kind))?);
+            files.extend(output::frame_files(&frame, kind, path, &print)?);
         }
         if let Some((file, zoom)) = &sampling.render_samples {
             let picture = sample_images::render_samples(&frame, &cmd.render.sampler, *zoom);

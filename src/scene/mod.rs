@@ -16,6 +16,7 @@ mod cursor;
 mod input;
 pub mod normals;
 pub mod obj;
+mod obj_lines;
 pub mod parse;
 mod passes;
 pub mod texture;

@@ -15,12 +15,33 @@
 //! Anything else, an index out of range, a face with fewer than three vertices, a degenerate
 //! triangle, a zero or non-finite normal or a file with no face at all is an error at
 //! `path:line:col`.
+//!
+//! A big file is read in parallel, in chunks of whole lines, with exactly the result and the
+//! first error (in file order) a single reading gives. A face's indices depend on how many
+//! vertices and normals came before it, so reading takes two passes over the chunks:
+//!
+//! ```text
+//! text --split at line ends--> chunks --pass 1 (parallel): v, vn, statement checks--> points
+//!      --prefix sums: first line, first vertex, first normal of each chunk
+//!      --pass 2 (parallel): f lines resolved against the points before them--> triangles
+//!      --concatenated in chunk order--> ObjMesh
+//! ```
+//!
+//! Each pass stops a chunk at its first error; the first chunk with one decides the file's
+//! error (a face error of pass 2 comes before the pass-1 error of its chunk, as pass 2 reads
+//! only the lines before that). A file of one chunk is read the same way, on one thread. The
+//! lines themselves are read in `obj_lines.rs`.
 
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use super::input::{decode_text, read_file};
+use super::obj_lines::{
+    Faces, Points, Stop, flat_corners, out_of_memory, read_faces, read_points, try_collect,
+};
 use crate::error::{Error, Result};
-use crate::math::{Vec3, is_degenerate};
+use crate::math::Vec3;
 
 /// The triangles of an OBJ file.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -39,212 +60,142 @@ pub fn load_obj(path: &Path) -> Result<ObjMesh> {
     parse_obj(text, path)
 }
 
-/// Reads the three numbers after `v` or `vn` at column `col`.
-fn coordinates<'a>(
-    words: &mut impl Iterator<Item = (usize, &'a str)>,
-    keyword: &str,
-    col: usize,
-    err: &dyn Fn(usize, String) -> Error,
-) -> Result<Vec3> {
-    let mut xyz = [0.0f32; 3];
-    for (i, c) in xyz.iter_mut().enumerate() {
-        let Some((col_n, word)) = words.next() else {
-            return Err(err(
-                col,
-                format!("expected 3 coordinates after `{keyword}`, found {i}"),
-            ));
-        };
-        *c = match word.parse::<f32>() {
-            Ok(v) if v.is_finite() => v,
-            _ => {
-                return Err(err(
-                    col_n,
-                    format!("expected a finite number, found `{}`", short(word)),
-                ));
-            }
-        };
-    }
-    Ok(Vec3::from_array(xyz))
-}
-
-/// Resolves a 1-based (or negative, relative) OBJ index into a list of `n` items.
-fn resolve(text: &str, n: usize) -> Option<usize> {
-    let n = n as i64;
-    match text.parse::<i64>() {
-        Ok(i) if i >= 1 && i <= n => Some((i - 1) as usize),
-        Ok(i) if i < 0 && i >= -n => Some((n + i) as usize),
-        _ => None,
-    }
-}
+/// Bytes of text one parallel task reads (then on to the end of the line): a file of at most
+/// this size is one chunk.
+const CHUNK_BYTES: usize = 1 << 20;
 
 /// Parses OBJ text; `path` names it in errors.
 pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
-    let mut vertices: Vec<Vec3> = Vec::new();
-    let mut vertex_normals: Vec<Vec3> = Vec::new();
-    let mut triangles = Vec::new();
-    // Corner normals per triangle, `None` for flat ones (filled in at the end).
-    let mut corner_normals: Vec<Option<[Vec3; 3]>> = Vec::new();
-    for (line_index, line) in text.lines().enumerate() {
-        let line_no = line_index + 1;
-        let mut words = words_with_columns(line);
-        let Some((col, keyword)) = words.next() else {
-            continue;
+    parse_obj_in_chunks(text, path, CHUNK_BYTES)
+}
+
+/// Cuts `text` into pieces of about `chunk_bytes`, each ending just after a `\n` (the last one
+/// at the end of the text): the lines of the pieces are the lines of the text. At least one
+/// piece, even for empty text.
+fn split_lines(text: &str, chunk_bytes: usize) -> Vec<&str> {
+    let bytes = text.as_bytes();
+    let mut chunks = Vec::with_capacity(text.len() / chunk_bytes.max(1) + 1);
+    let mut start = 0usize;
+    loop {
+        let end = start.saturating_add(chunk_bytes.max(1)).min(bytes.len());
+        let cut = match bytes[end..].iter().position(|&b| b == b'\n') {
+            Some(i) => end + i + 1,
+            None => bytes.len(),
         };
-        let err = |col: usize, msg: String| Error::parse(path, line_no, col, msg);
-        match keyword {
-            "v" => {
-                let v = coordinates(&mut words, "v", col, &err)?;
-                grow(&mut vertices, path)?;
-                vertices.push(v);
-            }
-            "vn" => {
-                let n = coordinates(&mut words, "vn", col, &err)?;
-                let Some(unit) = n.try_normalize() else {
-                    return Err(err(
-                        col,
-                        "expected a normal of non-zero length, found a zero vector".to_string(),
-                    ));
-                };
-                grow(&mut vertex_normals, path)?;
-                vertex_normals.push(unit);
-            }
-            "f" => {
-                // (vertex index, normal index if given, column)
-                let mut corners: Vec<(usize, Option<usize>, usize)> = Vec::new();
-                for (col_i, word) in words {
-                    let mut parts = word.split('/');
-                    let index_text = parts.next().unwrap_or("");
-                    let Some(index) = resolve(index_text, vertices.len()) else {
-                        let n = vertices.len();
-                        return Err(err(
-                            col_i,
-                            format!(
-                                "expected a vertex index between 1 and {n} (or -1 to -{n}), found `{}`",
-                                short(word)
-                            ),
-                        ));
-                    };
-                    let normal = match parts.nth(1) {
-                        None | Some("") => None,
-                        Some(text) => match resolve(text, vertex_normals.len()) {
-                            Some(k) => Some(k),
-                            None => {
-                                let n = vertex_normals.len();
-                                return Err(err(
-                                    col_i,
-                                    format!(
-                                        "expected a normal index between 1 and {n} (or -1 to -{n}) after the second `/`, found `{}`",
-                                        short(word)
-                                    ),
-                                ));
-                            }
-                        },
-                    };
-                    corners.push((index, normal, col_i));
-                }
-                if corners.len() < 3 {
-                    return Err(err(
-                        col,
-                        format!(
-                            "expected a face with at least 3 vertices, found {}",
-                            corners.len()
-                        ),
-                    ));
-                }
-                let smooth = corners.iter().all(|c| c.1.is_some());
-                for k in 1..corners.len() - 1 {
-                    let fan = [corners[0], corners[k], corners[k + 1]];
-                    let tri = fan.map(|c| vertices[c.0]);
-                    if is_degenerate(&tri) {
-                        return Err(err(
-                            col,
-                            "expected a triangle with non-zero area, found a degenerate face (collinear or repeated vertices)".to_string(),
-                        ));
-                    }
-                    grow(&mut triangles, path)?;
-                    grow(&mut corner_normals, path)?;
-                    triangles.push(tri);
-                    corner_normals
-                        .push(smooth.then(|| fan.map(|c| vertex_normals[c.1.expect("smooth")])));
-                }
-            }
-            "vt" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => {}
-            k if k.starts_with('#') => {}
-            other => {
-                return Err(err(
-                    col,
-                    format!(
-                        "expected an OBJ statement (v, f, vt, vn, o, g, s, usemtl, mtllib or a # comment), found `{}`",
-                        short(other)
-                    ),
-                ));
-            }
+        chunks.push(&text[start..cut]);
+        if cut == bytes.len() {
+            return chunks;
+        }
+        start = cut;
+    }
+}
+
+/// Parses OBJ text in chunks of about `chunk_bytes` (see the module's notes).
+fn parse_obj_in_chunks(text: &str, path: &Path, chunk_bytes: usize) -> Result<ObjMesh> {
+    let chunks = split_lines(text, chunk_bytes);
+    // One task per chunk: points gather at the start of a file, faces after them.
+    let points: Vec<Points> = chunks
+        .par_iter()
+        .with_max_len(1)
+        .map(|c| read_points(c))
+        .collect();
+    // Chunks after the first one that stopped cannot matter: their error would come later.
+    let used = points
+        .iter()
+        .position(|p| p.stop.is_some())
+        .map_or(chunks.len(), |k| k + 1);
+    let (mut first_line, mut first_vertex, mut first_normal) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut line, mut nv, mut nn) = (1, 0, 0);
+    for p in &points[..used] {
+        first_line.push(line);
+        first_vertex.push(nv);
+        first_normal.push(nn);
+        line += p.lines;
+        nv += p.vertices.len();
+        nn += p.normals.len();
+    }
+    let oom = |_| out_of_memory(path);
+    let vertices = concat_parts(points[..used].iter().map(|p| &p.vertices[..]), nv).map_err(oom)?;
+    let vertex_normals =
+        concat_parts(points[..used].iter().map(|p| &p.normals[..]), nn).map_err(oom)?;
+    let mut faces: Vec<Faces> = (0..used)
+        .into_par_iter()
+        .with_max_len(1)
+        .map(|k| match points[k].stop.as_ref().map(Stop::line) {
+            // Out of memory: the chunk fails as a whole.
+            Some(None) => Faces::default(),
+            until => read_faces(
+                chunks[k],
+                until.flatten().unwrap_or(usize::MAX),
+                (first_vertex[k], first_normal[k]),
+                (&vertices, &vertex_normals),
+            ),
+        })
+        .collect();
+    drop((vertices, vertex_normals));
+    // The first stop in file order: a chunk's face error comes before its pass-1 stop.
+    for (k, (f, p)) in faces.iter_mut().zip(points).enumerate() {
+        if let Some(stop) = f.stop.take().or(p.stop) {
+            return Err(stop.into_error(path, first_line[k]));
         }
     }
-    if triangles.is_empty() {
-        let lines = text.lines().count();
+    let count: usize = faces.iter().map(|f| f.triangles.len()).sum();
+    if count == 0 {
         return Err(Error::parse(
             path,
-            lines.max(1),
+            (line - 1).max(1),
             1,
             "expected at least one face (`f` line), found none".to_string(),
         ));
     }
-    let normals = if corner_normals.iter().any(Option::is_some) {
-        triangles
-            .iter()
-            .zip(corner_normals)
-            .map(|(t, n)| n.unwrap_or_else(|| [super::normals::face_normal(t); 3]))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let triangles = concat_parts(faces.iter().map(|f| &f.triangles[..]), count).map_err(oom)?;
+    let mut normals = Vec::new();
+    if faces.iter().any(|f| f.smooth) {
+        // The chunks without a smooth face get their flat corners now.
+        for f in faces.iter_mut().filter(|f| !f.smooth) {
+            f.normals = try_collect(f.triangles.iter().map(flat_corners))
+                .ok_or(())
+                .map_err(oom)?;
+        }
+        normals = concat_parts(faces.iter().map(|f| &f.normals[..]), count).map_err(oom)?;
+    }
     Ok(ObjMesh { triangles, normals })
 }
 
-/// Makes room for one more item, failing cleanly when memory runs out (a huge OBJ file is an
-/// error, not an abort).
-fn grow<T>(items: &mut Vec<T>, path: &Path) -> Result<()> {
-    if items.len() == items.capacity() {
-        items.try_reserve(items.len().max(64)).map_err(|_| {
-            Error::Limit(format!(
-                "{}: cannot load: the mesh does not fit in memory",
-                path.display()
-            ))
-        })?;
+/// The concatenation of `parts` (`total` items in all), copied in parallel; `Err` when memory
+/// runs out.
+fn concat_parts<'p, T: Copy + Send + Sync + 'p>(
+    parts: impl Iterator<Item = &'p [T]>,
+    total: usize,
+) -> std::result::Result<Vec<T>, ()> {
+    let parts: Vec<&[T]> = parts.collect();
+    let mut starts = Vec::with_capacity(parts.len() + 1);
+    let mut n = 0;
+    for p in &parts {
+        starts.push(n);
+        n += p.len();
     }
-    Ok(())
-}
-
-/// Whitespace-separated words of a line with their 1-based character columns.
-fn words_with_columns(line: &str) -> impl Iterator<Item = (usize, &str)> {
-    let mut rest = line;
-    let mut col = 1;
-    std::iter::from_fn(move || {
-        let trimmed = rest.trim_start();
-        col += rest[..rest.len() - trimmed.len()].chars().count();
-        if trimmed.is_empty() {
-            return None;
-        }
-        let end = trimmed.find(char::is_whitespace).unwrap_or(trimmed.len());
-        let word = &trimmed[..end];
-        let at = col;
-        col += word.chars().count();
-        rest = &trimmed[end..];
-        Some((at, word))
-    })
-}
-
-fn short(word: &str) -> String {
-    let mut s: String = word
-        .chars()
-        .take(24)
-        .flat_map(char::escape_default)
-        .collect();
-    if word.chars().count() > 24 {
-        s.push_str("...");
-    }
-    s
+    debug_assert_eq!(n, total);
+    let mut all = Vec::new();
+    all.try_reserve_exact(total).map_err(|_| ())?;
+    // Each task walks its run of items forward, part by part (`k` is where it is).
+    (0..total)
+        .into_par_iter()
+        .with_min_len(1 << 14)
+        .map_init(
+            || 0,
+            |k, i| {
+                if !(starts[*k]..starts[*k] + parts[*k].len()).contains(&i) {
+                    *k = starts.partition_point(|&s| s <= i) - 1;
+                    while parts[*k].is_empty() || i >= starts[*k] + parts[*k].len() {
+                        *k += 1;
+                    }
+                }
+                parts[*k][i - starts[*k]]
+            },
+        )
+        .collect_into_vec(&mut all);
+    Ok(all)
 }
 
 #[cfg(test)]
@@ -340,5 +291,127 @@ mod tests {
             e.to_string()
                 .starts_with("m.obj:2:1: expected an OBJ statement")
         );
+    }
+
+    /// A generated mesh of `n` quads with every kind of line: normals, `a//n` and `a/t/n`
+    /// corners, negative indices, fans, comments, ignored statements, blank and `\r\n` lines.
+    fn big_obj(n: usize) -> String {
+        let mut s = String::from("# generated\r\nmtllib m.mtl\n\n");
+        for i in 0..n {
+            let (x, y) = ((i % 97) as f32 * 0.5, (i / 97) as f32 * 0.25);
+            s += &format!(
+                "v {x} {y} 0\nv {} {y} 0.5\nv {} {} 0\nv {x} {} 1\n",
+                x + 0.5,
+                x + 0.5,
+                y + 0.25,
+                y + 0.25
+            );
+            s += &format!("vn 0 0 {}\r\nvt 0 0\n", 1 + i % 3);
+            match i % 4 {
+                0 => s += "f -4 -3 -2 -1\n",
+                1 => s += &format!("f {}//{} -3//-1 -2//{}\n  \n", 4 * i + 1, i + 1, i + 1),
+                2 => {
+                    s += &format!(
+                        "g part\nf {}/1/{} {} -1/1/-1\n",
+                        4 * i + 2,
+                        i + 1,
+                        4 * i + 3
+                    )
+                }
+                _ => s += "s off\nf -4 -2 -1\n# quad done\n",
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn chunks_read_exactly_what_one_reading_reads() {
+        let text = big_obj(600);
+        let one = parse_obj_in_chunks(&text, Path::new("m.obj"), usize::MAX).unwrap();
+        assert_eq!(one.triangles.len(), 600 / 4 * 5);
+        assert_eq!(one.normals.len(), one.triangles.len());
+        for chunk_bytes in [1, 7, 64, 1000, 4096] {
+            let chunked = parse_obj_in_chunks(&text, Path::new("m.obj"), chunk_bytes).unwrap();
+            assert!(split_lines(&text, chunk_bytes).len() > text.len() / (chunk_bytes + 64));
+            assert_eq!(chunked, one, "chunks of {chunk_bytes} bytes");
+        }
+        // A chunk without smooth faces beside chunks with: its triangles get flat corners.
+        let flat = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1 0 0\nf 1 2 3\nf 1//1 2//1 3//1\n";
+        let one = parse_obj_in_chunks(flat, Path::new("m.obj"), usize::MAX).unwrap();
+        assert_eq!(one.normals, [[Vec3::Z; 3], [Vec3::X; 3]]);
+        assert_eq!(
+            parse_obj_in_chunks(flat, Path::new("m.obj"), 1).unwrap(),
+            one
+        );
+    }
+
+    #[test]
+    fn the_first_error_in_file_order_wins_whatever_the_chunks() {
+        let text = big_obj(400);
+        let lines: Vec<&str> = text.split_inclusive('\n').collect();
+        let with = |at: usize, line: &str| {
+            let mut l = lines.clone();
+            l[at] = line;
+            l.concat()
+        };
+        let late = lines.len() - 7;
+        let cases = [
+            // Pass 2 (an index past the vertices read so far, a degenerate face), pass 1 (a
+            // bad number, an unknown statement, a zero normal), late and early.
+            (
+                with(late, "f 1 2 99999\n"),
+                format!(
+                    "m.obj:{}:7: expected a vertex index between 1 and 1598 (or -1 to -1598), found `99999`",
+                    late + 1
+                ),
+            ),
+            (
+                with(late, "f 1 1 2\n"),
+                format!(
+                    "m.obj:{}:1: expected a triangle with non-zero area",
+                    late + 1
+                ),
+            ),
+            (
+                with(late, "v 0 x 0\n"),
+                format!("m.obj:{}:5: expected a finite number, found `x`", late + 1),
+            ),
+            (
+                with(late, "  banana\n"),
+                format!("m.obj:{}:3: expected an OBJ statement", late + 1),
+            ),
+            (
+                with(40, "vn 0 0 0\n"),
+                "m.obj:41:1: expected a normal of non-zero length".to_string(),
+            ),
+        ];
+        for (text, expected) in &cases {
+            let one = parse_obj_in_chunks(text, Path::new("m.obj"), usize::MAX).unwrap_err();
+            assert!(
+                one.to_string().starts_with(expected.as_str()),
+                "{one} / {expected}"
+            );
+            for chunk_bytes in [1, 50, 999, 4096] {
+                let e = parse_obj_in_chunks(text, Path::new("m.obj"), chunk_bytes).unwrap_err();
+                assert_eq!(
+                    e.to_string(),
+                    one.to_string(),
+                    "chunks of {chunk_bytes} bytes"
+                );
+            }
+        }
+        // A face error before a statement error later in the file, in the same chunk or an
+        // earlier one: the face error is reported.
+        let both = with(late, "oops\n").replacen("f -4 -3 -2 -1", "f -4 -3 -2 -9999", 2);
+        let first = both.find("-9999").unwrap();
+        let line = both[..first].matches('\n').count() + 1;
+        for chunk_bytes in [1, 999, usize::MAX] {
+            let e = parse_obj_in_chunks(&both, Path::new("m.obj"), chunk_bytes).unwrap_err();
+            assert!(
+                e.to_string()
+                    .starts_with(&format!("m.obj:{line}:12: expected a vertex index")),
+                "{e}"
+            );
+        }
     }
 }
