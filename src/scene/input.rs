@@ -5,10 +5,19 @@
 //! ```text
 //! path --read_file--> bytes --decode_text--> &str --> parse.rs / obj.rs
 //! ```
+//!
+//! A big file (a mesh of millions of triangles) is read and checked in parallel pieces on
+//! rayon's threads: copying it out of the page cache and checking its UTF-8 would otherwise be
+//! a serial phase of every render of it.
 
 use std::path::Path;
 
+use rayon::prelude::*;
+
 use crate::error::{Error, Result};
+
+/// Files of at least this many bytes are read and checked in pieces of this size, in parallel.
+const PIECE_BYTES: usize = 4 << 20;
 
 /// Reads a whole input file. Only regular files are read (a device such as `/dev/zero` would
 /// never end), and a file too large for memory is an error, not an abort.
@@ -26,8 +35,43 @@ pub(crate) fn read_file(path: &Path, action: &'static str) -> Result<Vec<u8>> {
             std::io::Error::other(format!("it is {kind}")),
         ));
     }
+    if let Ok(len) = usize::try_from(meta.len())
+        && len >= PIECE_BYTES
+        && let Some(bytes) = read_in_pieces(path, len)
+    {
+        return Ok(bytes);
+    }
     // std::fs::read reserves the file's size with try_reserve: no abort on a huge file.
     std::fs::read(path).map_err(|e| Error::io(path, action, e))
+}
+
+/// Reads the `len` bytes of the file at `path` in parallel pieces; `None` if that fails in any
+/// way (the file changed size, no memory, ...): the caller then reads it the plain way, which
+/// reports the error if there is one.
+#[cfg(unix)]
+fn read_in_pieces(path: &Path, len: usize) -> Option<Vec<u8>> {
+    use std::os::unix::fs::FileExt;
+    let file = std::fs::File::open(path).ok()?;
+    let mut bytes = Vec::new();
+    bytes.try_reserve_exact(len).ok()?;
+    // Zeroed in parallel too: the pages of a fresh buffer are touched by the thread that reads
+    // into them.
+    bytes.par_extend(rayon::iter::repeat_n(0u8, len));
+    bytes
+        .par_chunks_mut(PIECE_BYTES)
+        .enumerate()
+        .try_for_each(|(i, piece)| file.read_exact_at(piece, (i * PIECE_BYTES) as u64))
+        .ok()?;
+    // The file grew while it was read: read it again the plain way.
+    match file.read_at(&mut [0u8], len as u64) {
+        Ok(0) => Some(bytes),
+        _ => None,
+    }
+}
+
+#[cfg(not(unix))]
+fn read_in_pieces(_path: &Path, _len: usize) -> Option<Vec<u8>> {
+    None
 }
 
 /// Checks that `bytes` are UTF-8 text, naming the first offending byte's position otherwise.
@@ -49,5 +93,22 @@ pub(crate) fn decode_text<'a>(bytes: &'a [u8], path: &Path) -> Result<&'a str> {
                 ),
             ))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_big_file_read_in_pieces_is_the_file() {
+        let path = std::env::temp_dir().join(format!("whitted-input-{}.bin", std::process::id()));
+        let bytes: Vec<u8> = (0..2 * PIECE_BYTES + 12345)
+            .map(|i| (i * 7 % 251) as u8)
+            .collect();
+        std::fs::write(&path, &bytes).unwrap();
+        let read = read_file(&path, "read");
+        let _ = std::fs::remove_file(&path);
+        assert!(read.unwrap() == bytes);
     }
 }

@@ -21,7 +21,7 @@
 //! vertices and normals came before it, so reading takes two passes over the chunks:
 //!
 //! ```text
-//! text --split at line ends--> chunks --pass 1 (parallel): v, vn, statement checks--> points
+//! bytes --split at line ends, UTF-8 checked--> chunks --pass 1 (parallel): v, vn, statement checks--> points
 //!      --prefix sums: first line, first vertex, first normal of each chunk
 //!      --pass 2 (parallel): f lines resolved against the points before them--> triangles
 //!      --concatenated in chunk order--> ObjMesh
@@ -56,8 +56,7 @@ pub struct ObjMesh {
 /// Loads the triangles of the OBJ file at `path`.
 pub fn load_obj(path: &Path) -> Result<ObjMesh> {
     let bytes = read_file(path, "read OBJ file")?;
-    let text = decode_text(&bytes, path)?;
-    parse_obj(text, path)
+    parse_obj_in_chunks(&bytes, path, CHUNK_BYTES)
 }
 
 /// Bytes of text one parallel task reads (then on to the end of the line): a file of at most
@@ -66,15 +65,14 @@ const CHUNK_BYTES: usize = 1 << 20;
 
 /// Parses OBJ text; `path` names it in errors.
 pub fn parse_obj(text: &str, path: &Path) -> Result<ObjMesh> {
-    parse_obj_in_chunks(text, path, CHUNK_BYTES)
+    parse_obj_in_chunks(text.as_bytes(), path, CHUNK_BYTES)
 }
 
-/// Cuts `text` into pieces of about `chunk_bytes`, each ending just after a `\n` (the last one
-/// at the end of the text): the lines of the pieces are the lines of the text. At least one
-/// piece, even for empty text.
-fn split_lines(text: &str, chunk_bytes: usize) -> Vec<&str> {
-    let bytes = text.as_bytes();
-    let mut chunks = Vec::with_capacity(text.len() / chunk_bytes.max(1) + 1);
+/// Cuts `bytes` into pieces of about `chunk_bytes`, each ending just after a `\n` (the last
+/// one at the end): the lines of the pieces are the lines of the text, and a piece never ends
+/// inside a character. At least one piece, even for empty text.
+fn split_lines(bytes: &[u8], chunk_bytes: usize) -> Vec<&[u8]> {
+    let mut chunks = Vec::with_capacity(bytes.len() / chunk_bytes.max(1) + 1);
     let mut start = 0usize;
     loop {
         let end = start.saturating_add(chunk_bytes.max(1)).min(bytes.len());
@@ -82,7 +80,7 @@ fn split_lines(text: &str, chunk_bytes: usize) -> Vec<&str> {
             Some(i) => end + i + 1,
             None => bytes.len(),
         };
-        chunks.push(&text[start..cut]);
+        chunks.push(&bytes[start..cut]);
         if cut == bytes.len() {
             return chunks;
         }
@@ -90,9 +88,21 @@ fn split_lines(text: &str, chunk_bytes: usize) -> Vec<&str> {
     }
 }
 
-/// Parses OBJ text in chunks of about `chunk_bytes` (see the module's notes).
-fn parse_obj_in_chunks(text: &str, path: &Path, chunk_bytes: usize) -> Result<ObjMesh> {
-    let chunks = split_lines(text, chunk_bytes);
+/// Parses OBJ text in chunks of about `chunk_bytes` (see the module's notes), checking that it
+/// is UTF-8 chunk by chunk.
+fn parse_obj_in_chunks(bytes: &[u8], path: &Path, chunk_bytes: usize) -> Result<ObjMesh> {
+    let pieces = split_lines(bytes, chunk_bytes);
+    // The pieces are UTF-8 if and only if the whole is; `decode_text` names the first bad
+    // byte's position.
+    let chunks: Option<Vec<&str>> = pieces
+        .par_iter()
+        .with_max_len(1)
+        .map(|p| std::str::from_utf8(p).ok())
+        .collect();
+    let chunks = match chunks {
+        Some(chunks) => chunks,
+        None => vec![decode_text(bytes, path)?],
+    };
     // One task per chunk: points gather at the start of a file, faces after them.
     let points: Vec<Points> = chunks
         .par_iter()
@@ -327,20 +337,23 @@ mod tests {
     #[test]
     fn chunks_read_exactly_what_one_reading_reads() {
         let text = big_obj(600);
-        let one = parse_obj_in_chunks(&text, Path::new("m.obj"), usize::MAX).unwrap();
+        let one = parse_obj_in_chunks(text.as_bytes(), Path::new("m.obj"), usize::MAX).unwrap();
         assert_eq!(one.triangles.len(), 600 / 4 * 5);
         assert_eq!(one.normals.len(), one.triangles.len());
         for chunk_bytes in [1, 7, 64, 1000, 4096] {
-            let chunked = parse_obj_in_chunks(&text, Path::new("m.obj"), chunk_bytes).unwrap();
-            assert!(split_lines(&text, chunk_bytes).len() > text.len() / (chunk_bytes + 64));
+            let chunked =
+                parse_obj_in_chunks(text.as_bytes(), Path::new("m.obj"), chunk_bytes).unwrap();
+            assert!(
+                split_lines(text.as_bytes(), chunk_bytes).len() > text.len() / (chunk_bytes + 64)
+            );
             assert_eq!(chunked, one, "chunks of {chunk_bytes} bytes");
         }
         // A chunk without smooth faces beside chunks with: its triangles get flat corners.
         let flat = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1 0 0\nf 1 2 3\nf 1//1 2//1 3//1\n";
-        let one = parse_obj_in_chunks(flat, Path::new("m.obj"), usize::MAX).unwrap();
+        let one = parse_obj_in_chunks(flat.as_bytes(), Path::new("m.obj"), usize::MAX).unwrap();
         assert_eq!(one.normals, [[Vec3::Z; 3], [Vec3::X; 3]]);
         assert_eq!(
-            parse_obj_in_chunks(flat, Path::new("m.obj"), 1).unwrap(),
+            parse_obj_in_chunks(flat.as_bytes(), Path::new("m.obj"), 1).unwrap(),
             one
         );
     }
@@ -386,13 +399,15 @@ mod tests {
             ),
         ];
         for (text, expected) in &cases {
-            let one = parse_obj_in_chunks(text, Path::new("m.obj"), usize::MAX).unwrap_err();
+            let one =
+                parse_obj_in_chunks(text.as_bytes(), Path::new("m.obj"), usize::MAX).unwrap_err();
             assert!(
                 one.to_string().starts_with(expected.as_str()),
                 "{one} / {expected}"
             );
             for chunk_bytes in [1, 50, 999, 4096] {
-                let e = parse_obj_in_chunks(text, Path::new("m.obj"), chunk_bytes).unwrap_err();
+                let e = parse_obj_in_chunks(text.as_bytes(), Path::new("m.obj"), chunk_bytes)
+                    .unwrap_err();
                 assert_eq!(
                     e.to_string(),
                     one.to_string(),
@@ -400,13 +415,28 @@ mod tests {
                 );
             }
         }
+        // Bad UTF-8 late in the file: the position of the first bad byte.
+        let mut bytes = text.clone().into_bytes();
+        let at = bytes.len() - 20;
+        bytes[at] = 0xff;
+        let one = parse_obj_in_chunks(&bytes, Path::new("m.obj"), usize::MAX).unwrap_err();
+        assert!(
+            one.to_string()
+                .contains("expected UTF-8 text, found byte 0xff"),
+            "{one}"
+        );
+        for chunk_bytes in [1, 999] {
+            let e = parse_obj_in_chunks(&bytes, Path::new("m.obj"), chunk_bytes).unwrap_err();
+            assert_eq!(e.to_string(), one.to_string());
+        }
         // A face error before a statement error later in the file, in the same chunk or an
         // earlier one: the face error is reported.
         let both = with(late, "oops\n").replacen("f -4 -3 -2 -1", "f -4 -3 -2 -9999", 2);
         let first = both.find("-9999").unwrap();
         let line = both[..first].matches('\n').count() + 1;
         for chunk_bytes in [1, 999, usize::MAX] {
-            let e = parse_obj_in_chunks(&both, Path::new("m.obj"), chunk_bytes).unwrap_err();
+            let e =
+                parse_obj_in_chunks(both.as_bytes(), Path::new("m.obj"), chunk_bytes).unwrap_err();
             assert!(
                 e.to_string()
                     .starts_with(&format!("m.obj:{line}:12: expected a vertex index")),
