@@ -164,8 +164,7 @@ fn parse_obj_in_chunks(bytes: &[u8], path: &Path, chunk_bytes: usize) -> Result<
         // The chunks without a smooth face get their flat corners now.
         for f in faces.iter_mut().filter(|f| !f.smooth) {
             f.normals = try_collect(f.triangles.iter().map(flat_corners))
-                .ok_or(())
-                .map_err(oom)?;
+                .ok_or_else(|| out_of_memory(path))?;
         }
         normals = concat_parts(faces.iter().map(|f| &f.normals[..]), count).map_err(oom)?;
     }
