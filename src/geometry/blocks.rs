@@ -19,7 +19,7 @@
 use super::{Geometry, PrimKind};
 use crate::bvh::arena::Arena;
 use crate::bvh::build::LeafSink;
-use crate::intersect::sphere::{affine_point, affine_vector, sphere_lanes};
+use crate::intersect::sphere::{affine_packet, affine_point, affine_vector, sphere_lanes};
 use crate::intersect::triangle::triangle_lanes;
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
@@ -432,7 +432,7 @@ impl Geometry {
             PrimKind::TransformedSphere => {
                 let base = self.base(PrimKind::TransformedSphere) as u32;
                 for &i in &self.blocks.transformed[first..first + count] {
-                    let local = transformed_packet(&self.transformed.inverse(i as usize), rays);
+                    let local = affine_packet(&self.transformed.inverse(i as usize), rays);
                     let (real, t0, t1) =
                         sphere_lanes(Vec3x8::zero(), F32x8::splat(1.0), local.origin, local.dir);
                     let (h0, h1) = (real & gt(t0, rays.tmin), real & gt(t1, rays.tmin));
@@ -514,7 +514,7 @@ impl Geometry {
             }
             PrimKind::TransformedSphere => {
                 for &i in &self.blocks.transformed[first..first + count] {
-                    let local = transformed_packet(&self.transformed.inverse(i as usize), rays);
+                    let local = affine_packet(&self.transformed.inverse(i as usize), rays);
                     let (real, t0, t1) =
                         sphere_lanes(Vec3x8::zero(), F32x8::splat(1.0), local.origin, local.dir);
                     occluded |= real & (in_range(t0) | in_range(t1));
@@ -523,26 +523,5 @@ impl Geometry {
             PrimKind::Plane => unreachable!("planes are not in the BVH"),
         }
         occluded & lanes
-    }
-}
-
-/// A packet moved into a transformed sphere's own space (the arithmetic of
-/// [`crate::intersect::intersect_transformed_sphere_packet`]).
-#[inline(always)]
-pub(super) fn transformed_packet(inv: &[f32; 12], rays: &RayPacket) -> RayPacket {
-    let m = |i: usize| F32x8::splat(inv[i]);
-    let (o, d) = (rays.origin, rays.dir);
-    RayPacket {
-        origin: Vec3x8 {
-            x: m(0) * o.x + m(1) * o.y + m(2) * o.z + m(3),
-            y: m(4) * o.x + m(5) * o.y + m(6) * o.z + m(7),
-            z: m(8) * o.x + m(9) * o.y + m(10) * o.z + m(11),
-        },
-        dir: Vec3x8 {
-            x: m(0) * d.x + m(1) * d.y + m(2) * d.z,
-            y: m(4) * d.x + m(5) * d.y + m(6) * d.z,
-            z: m(8) * d.x + m(9) * d.y + m(10) * d.z,
-        },
-        ..*rays
     }
 }

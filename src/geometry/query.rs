@@ -9,9 +9,10 @@
 //! smaller geometry index, so single rays, packets and streams give the same `(t, prim)` bit for
 //! bit. Packet queries never touch inactive lanes.
 
-use super::blocks::{Best, transformed_packet};
+use super::blocks::Best;
 use super::{Geometry, PrimKind};
 use crate::bvh::MAX_STREAM;
+use crate::intersect::sphere::affine_packet;
 use crate::intersect::sphere::sphere_lanes;
 use crate::intersect::{
     intersect_plane, intersect_plane_packet, intersect_transformed_sphere,
@@ -428,7 +429,7 @@ impl Geometry {
         }
         let base = self.base(PrimKind::TransformedSphere);
         for i in 0..self.transformed.len() {
-            let local = transformed_packet(&self.transformed.inverse(i), rays);
+            let local = affine_packet(&self.transformed.inverse(i), rays);
             let (real, t0, t1) =
                 sphere_lanes(Vec3x8::zero(), F32x8::splat(1.0), local.origin, local.dir);
             take_roots_packet(

@@ -99,6 +99,27 @@ pub fn affine_vector(m: &[f32; 12], d: Vec3) -> Vec3 {
     )
 }
 
+/// [`affine_point`] and [`affine_vector`] for every lane of a packet: the packet moved by `m`
+/// (origins as points, directions as vectors), its limits and active lanes unchanged.
+#[inline(always)]
+pub fn affine_packet(m: &[f32; 12], rays: &RayPacket) -> RayPacket {
+    let m = |i: usize| F32x8::splat(m[i]);
+    let (o, d) = (rays.origin, rays.dir);
+    RayPacket {
+        origin: Vec3x8 {
+            x: m(0) * o.x + m(1) * o.y + m(2) * o.z + m(3),
+            y: m(4) * o.x + m(5) * o.y + m(6) * o.z + m(7),
+            z: m(8) * o.x + m(9) * o.y + m(10) * o.z + m(11),
+        },
+        dir: Vec3x8 {
+            x: m(0) * d.x + m(1) * d.y + m(2) * d.z,
+            y: m(4) * d.x + m(5) * d.y + m(6) * d.z,
+            z: m(8) * d.x + m(9) * d.y + m(10) * d.z,
+        },
+        ..*rays
+    }
+}
+
 /// A sphere under an arbitrary affine transform, given as `inv`: the 3x4 row-major affine
 /// taking world space to the space where the sphere is the unit sphere at the origin. `t` is
 /// the same in both spaces because the direction is not renormalised.
@@ -120,21 +141,7 @@ pub fn intersect_transformed_sphere_packet(
     rays: &RayPacket,
     tmax: F32x8,
 ) -> (Mask, F32x8) {
-    let m = |i: usize| F32x8::splat(inv[i]);
-    let (o, d) = (rays.origin, rays.dir);
-    let local = RayPacket {
-        origin: Vec3x8 {
-            x: m(0) * o.x + m(1) * o.y + m(2) * o.z + m(3),
-            y: m(4) * o.x + m(5) * o.y + m(6) * o.z + m(7),
-            z: m(8) * o.x + m(9) * o.y + m(10) * o.z + m(11),
-        },
-        dir: Vec3x8 {
-            x: m(0) * d.x + m(1) * d.y + m(2) * d.z,
-            y: m(4) * d.x + m(5) * d.y + m(6) * d.z,
-            z: m(8) * d.x + m(9) * d.y + m(10) * d.z,
-        },
-        ..*rays
-    };
+    let local = affine_packet(inv, rays);
     intersect_sphere_packet(Vec3::ZERO, 1.0, &local, tmax)
 }
 
