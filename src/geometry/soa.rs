@@ -47,21 +47,6 @@ impl SphereSoa {
     pub fn center(&self, i: usize) -> Vec3 {
         Vec3::new(self.cx[i], self.cy[i], self.cz[i])
     }
-
-    /// Reorders the spheres: new position `k` holds old sphere `order[k]`.
-    pub fn permute(&mut self, order: &[u32]) {
-        for col in [
-            &mut self.cx,
-            &mut self.cy,
-            &mut self.cz,
-            &mut self.radius,
-            &mut self.radius2,
-        ] {
-            permute(col, order);
-        }
-        permute(&mut self.material, order);
-        permute(&mut self.id, order);
-    }
 }
 
 /// Triangles: `v0`, edges `e1 = v1 - v0`, `e2 = v2 - v0`, and the unit geometric normal.
@@ -220,28 +205,6 @@ impl TriangleSoa {
     pub fn normal(&self, i: usize) -> Vec3 {
         Vec3::new(self.nx[i], self.ny[i], self.nz[i])
     }
-
-    /// Reorders the triangles: new position `k` holds old triangle `order[k]`.
-    pub fn permute(&mut self, order: &[u32]) {
-        for col in [
-            &mut self.v0x,
-            &mut self.v0y,
-            &mut self.v0z,
-            &mut self.e1x,
-            &mut self.e1y,
-            &mut self.e1z,
-            &mut self.e2x,
-            &mut self.e2y,
-            &mut self.e2z,
-            &mut self.nx,
-            &mut self.ny,
-            &mut self.nz,
-        ] {
-            permute(col, order);
-        }
-        permute(&mut self.material, order);
-        permute(&mut self.id, order);
-    }
 }
 
 /// Infinite planes `n . p = offset` (unit `n`). They have no bounds, so they stay out of the BVH.
@@ -321,21 +284,6 @@ impl TransformedSphereSoa {
     pub fn inverse(&self, i: usize) -> [f32; 12] {
         std::array::from_fn(|k| self.inv[k][i])
     }
-
-    /// Reorders the spheres: new position `k` holds old sphere `order[k]`.
-    pub fn permute(&mut self, order: &[u32]) {
-        for col in self.inv.iter_mut() {
-            permute(col, order);
-        }
-        permute(&mut self.world, order);
-        permute(&mut self.material, order);
-        permute(&mut self.id, order);
-    }
-}
-
-fn permute<T: Copy>(col: &mut Vec<T>, order: &[u32]) {
-    let old = std::mem::take(col);
-    *col = order.iter().map(|&i| old[i as usize]).collect();
 }
 
 #[cfg(test)]
