@@ -23,6 +23,9 @@ pub enum Error {
     },
     /// The command line is malformed.
     Usage(String),
+    /// The command line of subcommand `command` is malformed: the hint names that command's
+    /// own `--help` ([`Error::in_command`] makes it from a [`Error::Usage`]).
+    CommandUsage { command: &'static str, msg: String },
     /// A request exceeds a resource limit (image size, bounce count, memory).
     Limit(String),
     /// Anything else that stops a render, with a readable message.
@@ -40,6 +43,15 @@ impl Error {
             line,
             col,
             msg: msg.into(),
+        }
+    }
+
+    /// A usage error raised under subcommand `command` points at `whitted COMMAND --help`;
+    /// every other error is returned as it is.
+    pub fn in_command(self, command: &'static str) -> Error {
+        match self {
+            Error::Usage(msg) => Error::CommandUsage { command, msg },
+            e => e,
         }
     }
 
@@ -68,6 +80,9 @@ impl fmt::Display for Error {
                 source,
             } => write!(f, "{}: cannot {action}: {source}", path.display()),
             Error::Usage(msg) => write!(f, "{msg} (see `whitted --help`)"),
+            Error::CommandUsage { command, msg } => {
+                write!(f, "{msg} (see `whitted {command} --help`)")
+            }
             Error::Limit(msg) | Error::Other(msg) => f.write_str(msg),
         }
     }

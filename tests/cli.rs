@@ -26,12 +26,20 @@ fn scene() -> String {
 }
 
 /// Runs `args` in a fresh folder and asserts the one-line usage error `message` (without the
-/// `error: ` prefix and the `--help` hint), exit code 2 and an unchanged folder.
+/// `error: ` prefix and the `--help` hint), exit code 2 and an unchanged folder. The hint names
+/// the subcommand's own help (`whitted bench --help`), or `whitted --help` for course options.
 fn assert_usage_error(name: &str, args: &[&str], message: &str) {
     let dir = scratch_dir(&format!("cli/{name}"));
     let run = whitted(&dir, args);
     let msg = run.assert_error(message);
-    assert_eq!(msg, format!("{message} (see `whitted --help`)"), "{args:?}");
+    // a subcommand's errors point at its own help, the course's command lines at the overview
+    let help = match args.first() {
+        Some(&c) if ["render", "bench", "tiles", "merge"].contains(&c) => {
+            format!("whitted {c} --help")
+        }
+        _ => "whitted --help".to_string(),
+    };
+    assert_eq!(msg, format!("{message} (see `{help}`)"), "{args:?}");
     assert!(listing(&dir).is_empty(), "{name}: a file was left");
     assert!(run.stdout.is_empty(), "{name}: nothing belongs on stdout");
 }

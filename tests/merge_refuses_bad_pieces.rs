@@ -98,7 +98,7 @@ fn overlaps_gaps_and_repeats_are_refused() {
     );
     assert_eq!(
         refused(&dir, "out.png", &[]),
-        "expected pieces to merge: whitted merge OUT PIECE... (see `whitted --help`)"
+        "expected pieces to merge: whitted merge OUT PIECE... (see `whitted merge --help`)"
     );
 }
 

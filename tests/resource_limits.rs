@@ -200,7 +200,7 @@ fn a_negative_weight_is_refused() {
     );
     assert_eq!(
         run.assert_error("weight"),
-        "weight -1: expected a non-negative number (see `whitted --help`)"
+        "weight -1: expected a non-negative number (see `whitted render --help`)"
     );
 }
 

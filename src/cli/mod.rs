@@ -120,7 +120,7 @@ pub fn run(args: Vec<OsString>) -> Result<()> {
             None => print_help(&render::help()),
         },
         Some(name) => match COMMANDS.iter().find(|c| c.name == name) {
-            Some(command) => (command.run)(&args[1..]),
+            Some(command) => (command.run)(&args[1..]).map_err(|e| e.in_command(command.name)),
             None => Err(Error::Usage(format!(
                 "unknown command `{name}`: expected {} or course options like -input",
                 COMMANDS
