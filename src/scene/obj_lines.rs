@@ -163,32 +163,38 @@ pub(super) fn face<'a>(
     out: &mut Faces,
 ) -> std::result::Result<(), Option<(usize, String)>> {
     corners.clear();
+    // a `what` out of `1..=n` (or `-n..=-1`) at column `col_i` of `word`; `place` says where
+    let out_of_range = |col_i: usize, what: &str, n: usize, place: &str, word: &str| {
+        let word = short(word);
+        let msg =
+            format!("expected a {what} between 1 and {n} (or -1 to -{n}){place}, found `{word}`");
+        Some((col_i, msg))
+    };
     for (col_i, word) in words {
         let mut parts = word.split('/');
         let index_text = parts.next().unwrap_or("");
         let Some(index) = resolve(index_text, vertices.len()) else {
-            let n = vertices.len();
-            return Err(Some((
+            return Err(out_of_range(
                 col_i,
-                format!(
-                    "expected a vertex index between 1 and {n} (or -1 to -{n}), found `{}`",
-                    short(word)
-                ),
-            )));
+                "vertex index",
+                vertices.len(),
+                "",
+                word,
+            ));
         };
         let normal = match parts.nth(1) {
             None | Some("") => None,
             Some(text) => match resolve(text, normals.len()) {
                 Some(k) => Some(k),
                 None => {
-                    let n = normals.len();
-                    return Err(Some((
+                    let place = " after the second `/`";
+                    return Err(out_of_range(
                         col_i,
-                        format!(
-                            "expected a normal index between 1 and {n} (or -1 to -{n}) after the second `/`, found `{}`",
-                            short(word)
-                        ),
-                    )));
+                        "normal index",
+                        normals.len(),
+                        place,
+                        word,
+                    ));
                 }
             },
         };
