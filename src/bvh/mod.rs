@@ -193,6 +193,40 @@ impl NodeRef {
 const LO: usize = 0;
 const HI: usize = 3;
 
+/// An index into [`Node8::bounds`] whose range the compiler knows (six values), so the box
+/// tests pick a ray's entry and exit planes by it without a bounds check.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
+enum Plane {
+    LoX,
+    LoY,
+    LoZ,
+    HiX,
+    HiY,
+    HiZ,
+}
+
+impl Plane {
+    /// `[down][axis]`: the plane a ray enters through on `axis`, `down` when its direction
+    /// component is negative.
+    const ENTRY: [[Plane; 3]; 2] = [
+        [Plane::LoX, Plane::LoY, Plane::LoZ],
+        [Plane::HiX, Plane::HiY, Plane::HiZ],
+    ];
+
+    /// The plane a ray enters its boxes through on `axis`.
+    #[inline(always)]
+    fn entry(axis: usize, down: bool) -> Plane {
+        Self::ENTRY[usize::from(down)][axis]
+    }
+
+    /// The plane it leaves them through (the entry plane's opposite).
+    #[inline(always)]
+    fn exit(axis: usize, down: bool) -> Plane {
+        Self::ENTRY[usize::from(!down)][axis]
+    }
+}
+
 /// An interior node: its children's boxes structure of arrays and their references. Children
 /// occupy slots `0..n`; the other slots are [`NodeRef::EMPTY`] with the inverted box
 /// (`lo = +inf`, `hi = -inf`), which the slab test rejects for every ray direction.

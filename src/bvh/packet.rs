@@ -6,12 +6,13 @@
 
 use super::stack::Stack;
 use super::{
-    Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, TraversalProbe, WIDTH, safe_inverse8,
-    widen8,
+    Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, Plane, TraversalProbe, WIDTH,
+    safe_inverse8, widen8,
 };
 use crate::packet::RayPacket;
 use crate::simd::{
-    F32x8, Mask, Vec3x8, all, any, bitmask, ge, lanes, le, max, min, reduce_max, reduce_min, select,
+    F32x8, Mask, Vec3x8, all, any, bitmask, ge, lanes, le, lt, max, min, reduce_max, reduce_min,
+    select,
 };
 
 /// Entries a packet stack may hold.
@@ -58,6 +59,36 @@ impl Packet8 {
         self.test_planes(|k| n.bounds[k].as_array()[i], tmin, tmax)
     }
 
+    /// [`Packet8::test`] for lanes that all share the octant of frustum `f`: each axis is
+    /// entered through the frustum's entry plane, so the per-axis min/max of the general slab
+    /// is not needed. For those lanes the same bits as [`Packet8::test`] (rounding is
+    /// monotonic, so the min/max would pick the same distances).
+    #[inline(always)]
+    pub(super) fn test_octant(
+        &self,
+        n: &Node8,
+        i: usize,
+        f: &Frustum,
+        tmin: F32x8,
+        tmax: F32x8,
+    ) -> (Mask, F32x8) {
+        let (o, inv) = (
+            [self.org.x, self.org.y, self.org.z],
+            [self.inv.x, self.inv.y, self.inv.z],
+        );
+        let t =
+            |k: Plane, a: usize| (F32x8::splat(n.bounds[k as usize].as_array()[i]) - o[a]) * inv[a];
+        let near = max(
+            max(t(f.near[0], 0), t(f.near[1], 1)),
+            max(t(f.near[2], 2), tmin),
+        );
+        let far = min(
+            min(t(f.far[0], 0), t(f.far[1], 1)),
+            min(t(f.far[2], 2), tmax),
+        );
+        (le(near, widen8(far)), near)
+    }
+
     /// [`Packet8::test`] for a box given as an [`Aabb`].
     #[inline(always)]
     pub(super) fn test_box(&self, b: &super::Aabb, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
@@ -92,8 +123,8 @@ impl Packet8 {
 #[derive(Clone, Copy)]
 pub(super) struct Frustum {
     /// The plane each axis is entered through (all rays share it) and left through.
-    near: [usize; 3],
-    far: [usize; 3],
+    near: [Plane; 3],
+    far: [Plane; 3],
     /// The origin bound that gives the smallest entry / largest exit difference.
     o_near: [F32x8; 3],
     o_far: [F32x8; 3],
@@ -113,11 +144,15 @@ impl Frustum {
         let (mut i_lo, mut i_hi) = ([inf; 3], [ninf; 3]);
         let mut t_lo = inf;
         let mut any_lane = false;
+        // per axis, whether some active ray goes down it and whether some goes up
+        let (mut down, mut up) = ([false; 3], [false; 3]);
         for (p, active, tmin) in packets {
             any_lane |= any(active);
             let o = [p.org.x, p.org.y, p.org.z];
             let v = [p.inv.x, p.inv.y, p.inv.z];
             for a in 0..3 {
+                down[a] |= any(active & lt(v[a], F32x8::ZERO));
+                up[a] |= any(active & ge(v[a], F32x8::ZERO));
                 o_lo[a] = min(o_lo[a], select(active, o[a], inf));
                 o_hi[a] = max(o_hi[a], select(active, o[a], ninf));
                 i_lo[a] = min(i_lo[a], select(active, v[a], inf));
@@ -125,10 +160,10 @@ impl Frustum {
             }
             t_lo = min(t_lo, select(active, tmin, inf));
         }
-        if !any_lane {
+        // no common octant: the test below would find it too, after twelve reductions
+        if !any_lane || (0..3).any(|a| down[a] && up[a]) {
             return None;
         }
-        let mut near = [0; 3];
         let (mut o_near, mut o_far) = ([inf; 3], [inf; 3]);
         let (mut inv_lo, mut inv_hi) = ([inf; 3], [inf; 3]);
         for a in 0..3 {
@@ -138,7 +173,7 @@ impl Frustum {
             if !positive && ihi >= 0.0 {
                 return None;
             }
-            near[a] = if positive { LO + a } else { HI + a };
+            down[a] = !positive;
             // Entry: the smallest (plane - origin) for rays going up the axis is from the
             // largest origin; going down, from the smallest. Exit: the opposite.
             o_near[a] = F32x8::splat(if positive { ohi } else { olo });
@@ -147,8 +182,8 @@ impl Frustum {
             inv_hi[a] = F32x8::splat(ihi);
         }
         Some(Frustum {
-            near,
-            far: near.map(|k| if k >= HI { k - HI } else { k + HI }),
+            near: std::array::from_fn(|a| Plane::entry(a, down[a])),
+            far: std::array::from_fn(|a| Plane::exit(a, down[a])),
             o_near,
             o_far,
             inv_lo,
@@ -163,11 +198,11 @@ impl Frustum {
     pub(super) fn test(&self, n: &Node8, tmax: F32x8) -> (u32, F32x8) {
         let zero = F32x8::splat(0.0);
         let entry = |a: usize| {
-            let d = n.bounds[self.near[a]] - self.o_near[a];
+            let d = n.bounds[self.near[a] as usize] - self.o_near[a];
             d * select(ge(d, zero), self.inv_lo[a], self.inv_hi[a])
         };
         let exit = |a: usize| {
-            let d = n.bounds[self.far[a]] - self.o_far[a];
+            let d = n.bounds[self.far[a] as usize] - self.o_far[a];
             d * select(ge(d, zero), self.inv_hi[a], self.inv_lo[a])
         };
         let near = max(max(entry(0), entry(1)), max(entry(2), self.tmin));
@@ -224,7 +259,10 @@ fn hit_children(
     while cand != 0 {
         let i = cand.trailing_zeros() as usize;
         cand &= cand - 1;
-        let (hit, near) = p.test(n, i, rays.tmin, tmax);
+        let (hit, near) = match frustum {
+            Some(f) => p.test_octant(n, i, f, rays.tmin, tmax),
+            None => p.test(n, i, rays.tmin, tmax),
+        };
         let hit = hit & lanes_mask;
         if !any(hit) {
             continue;
@@ -382,7 +420,10 @@ impl Bvh8 {
                 while cand != 0 {
                     let i = 31 - cand.leading_zeros() as usize;
                     cand &= !(1 << i);
-                    let (hit, _) = p.test(n, i, rays.tmin, tmax);
+                    let (hit, _) = match &frustum {
+                        Some(f) => p.test_octant(n, i, f, rays.tmin, tmax),
+                        None => p.test(n, i, rays.tmin, tmax),
+                    };
                     let hit = hit & lanes_mask;
                     if any(hit) {
                         if let Some(prev) = next.replace((n.child[i], hit)) {
@@ -397,5 +438,100 @@ impl Bvh8 {
             }
         }
         occluded
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Frustum, Packet8};
+    use crate::bvh::{Aabb, Node8, NodeRef};
+    use crate::math::{Ray, Vec3};
+    use crate::packet::RayPacket;
+    use crate::simd::{LANES, bitmask, lanes, mask_first};
+
+    /// A small deterministic generator (xorshift), values in `[lo, hi)`.
+    struct Rng(u32);
+
+    impl Rng {
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            lo + (hi - lo) * (self.0 >> 8) as f32 / (1u32 << 24) as f32
+        }
+
+        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
+            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
+        }
+    }
+
+    /// For rays sharing an octant, the octant test gives the general slab test's bits (mask
+    /// and entry distances) for every child and every count of active lanes, directions
+    /// along an axis and boxes the rays start inside included.
+    #[test]
+    fn octant_test_equals_the_general_slab_test() {
+        let mut rng = Rng(0x9e37_79b9);
+        for case in 0..400 {
+            let children: Vec<(NodeRef, Aabb)> = (0..1 + case % 8)
+                .map(|_| {
+                    let (a, b) = (rng.vec(-4.0, 4.0), rng.vec(-4.0, 4.0));
+                    (
+                        NodeRef::EMPTY,
+                        Aabb {
+                            min: a.min(b),
+                            max: a.max(b),
+                        },
+                    )
+                })
+                .collect();
+            let n = Node8::new(&children);
+            let sign = Vec3::new(
+                if case & 1 == 0 { 1.0 } else { -1.0 },
+                if case & 2 == 0 { 1.0 } else { -1.0 },
+                if case & 4 == 0 { 1.0 } else { -1.0 },
+            );
+            let rays: [Ray; LANES] = std::array::from_fn(|l| {
+                let mut d = rng.vec(0.0, 1.0) * sign;
+                if l == 3 {
+                    d = Vec3::new(0.0, 0.0, 1.0) * sign; // a signed zero keeps the octant
+                }
+                Ray::new(rng.vec(-6.0, 6.0), d.normalize_or(Vec3::Z * sign.z))
+            });
+            let active_lanes = 1 + case % LANES;
+            let mut packet = RayPacket::from_rays(&rays, 1e-3);
+            packet.active = mask_first(active_lanes);
+            let p = Packet8::new(&packet);
+            let f = Frustum::new(std::iter::once((&p, packet.active, packet.tmin)))
+                .expect("one octant");
+            let tmax = crate::simd::from_lanes(std::array::from_fn(|_| rng.range(0.5, 12.0)));
+            for i in 0..children.len() {
+                let (m0, near0) = p.test(&n, i, packet.tmin, tmax);
+                let (m1, near1) = p.test_octant(&n, i, &f, packet.tmin, tmax);
+                let active = (1u32 << active_lanes) - 1;
+                assert_eq!(
+                    bitmask(m0) & active,
+                    bitmask(m1) & active,
+                    "case {case} child {i}"
+                );
+                for l in 0..active_lanes {
+                    assert_eq!(lanes(near0)[l].to_bits(), lanes(near1)[l].to_bits());
+                }
+            }
+        }
+    }
+
+    /// Rays going both ways along an axis have no frustum.
+    #[test]
+    fn mixed_octants_have_no_frustum() {
+        let rays: [Ray; LANES] = std::array::from_fn(|l| {
+            let x = if l == 5 { -1.0 } else { 1.0 };
+            Ray::new(Vec3::ZERO, Vec3::new(x, 0.5, 0.5).normalize())
+        });
+        let mut packet = RayPacket::from_rays(&rays, 1e-3);
+        let p = Packet8::new(&packet);
+        assert!(Frustum::new(std::iter::once((&p, packet.active, packet.tmin))).is_none());
+        // without the one lane going down x, they share an octant
+        packet.active = crate::simd::mask_from_bits(0xff & !(1 << 5));
+        assert!(Frustum::new(std::iter::once((&p, packet.active, packet.tmin))).is_some());
     }
 }

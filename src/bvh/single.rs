@@ -3,7 +3,7 @@
 //! min/max), hit children are visited nearest first (closest hit) or in slot order (any hit).
 
 use super::stack::Stack;
-use super::{Bvh8, HI, LO, Leaf, MAX_DEPTH, Node8, NodeRef, WIDTH, safe_inverse, widen, widen8};
+use super::{Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, WIDTH, safe_inverse, widen, widen8};
 use crate::math::Ray;
 use crate::simd::{F32x8, bitmask, le, max, min};
 
@@ -16,8 +16,8 @@ pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 pub(super) struct Ray1 {
     org: [F32x8; 3],
     inv: [F32x8; 3],
-    near: [usize; 3],
-    far: [usize; 3],
+    near: [Plane; 3],
+    far: [Plane; 3],
 }
 
 impl Ray1 {
@@ -29,12 +29,12 @@ impl Ray1 {
     /// From an origin and the safe reciprocal direction ([`safe_inverse`]).
     #[inline(always)]
     pub(super) fn from_parts(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
-        let near: [usize; 3] = std::array::from_fn(|a| if inv[a] >= 0.0 { LO + a } else { HI + a });
+        let down = inv.map(|i| i < 0.0);
         Ray1 {
             org: o.map(F32x8::splat),
             inv: inv.map(F32x8::splat),
-            near,
-            far: near.map(|k| if k >= HI { k - HI } else { k + HI }),
+            near: std::array::from_fn(|a| Plane::entry(a, down[a])),
+            far: std::array::from_fn(|a| Plane::exit(a, down[a])),
         }
     }
 
@@ -43,7 +43,9 @@ impl Ray1 {
     /// error relative to the distance itself, which the widening of the exit distance covers.
     #[inline(always)]
     pub(super) fn test(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> (u32, F32x8) {
-        let t = |plane: usize, axis: usize| (n.bounds[plane] - self.org[axis]) * self.inv[axis];
+        let t = |plane: Plane, axis: usize| {
+            (n.bounds[plane as usize] - self.org[axis]) * self.inv[axis]
+        };
         let near = max(
             max(t(self.near[0], 0), t(self.near[1], 1)),
             max(t(self.near[2], 2), tmin),

@@ -45,7 +45,8 @@ impl Stream<'_> {
         while m != 0 {
             let p = m.trailing_zeros() as usize / LANES;
             m &= !(0xff << (LANES * p));
-            let (hit, _) = self.packets[p].test(n, i, self.rays[p].tmin, tmax[p]);
+            let (hit, _) =
+                self.packets[p].test_octant(n, i, &self.frustum, self.rays[p].tmin, tmax[p]);
             let bits = bitmask(hit) & byte(mask, p);
             out |= (bits as u64) << (LANES * p);
         }
