@@ -25,13 +25,16 @@ struct Walk {
 impl Bvh8 {
     /// The closest hits of rays `0..n`, `ray(i)` giving ray `i` and its `(tmin, tmax)`:
     /// [`Bvh8::closest`] for each, with [`IN_FLIGHT`] walks interleaved. `leaf(i, leaf, tmax)`
-    /// tests the leaf's primitives for ray `i` and lowers its `tmax` on hits. Each ray's walk
-    /// is exactly its single-ray walk, so the results are the same.
+    /// tests the leaf's primitives for ray `i` and lowers its `tmax` on hits; `touch(leaf)`
+    /// starts fetching a leaf's primitives when a walk pushes it for later (measured: PERF.md,
+    /// "Prefetching pushed leaves"). Each ray's walk is exactly its single-ray walk, so the
+    /// results are the same.
     pub fn closest_many(
         &self,
         n: usize,
         ray: impl Fn(usize) -> (Ray, f32, f32),
         mut leaf: impl FnMut(usize, Leaf, &mut f32),
+        touch: impl Fn(Leaf),
     ) {
         if self.root.is_empty() || n == 0 {
             return;
@@ -65,7 +68,7 @@ impl Bvh8 {
                     None
                 } else {
                     let node = &self.nodes[w.cur.index()];
-                    self.descend(&w.ray, node, w.tmin, w.tmax, &mut w.stack)
+                    self.descend(&w.ray, node, w.tmin, w.tmax, &mut w.stack, &touch)
                 };
                 match step.or_else(|| pop_nearer(&mut w.stack, w.tmax)) {
                     Some(c) => w.cur = c,

@@ -235,6 +235,7 @@ impl Geometry {
                     self.closest_leaf(leaf, &list[i].0, list[i].1, &mut best[i]);
                     *tmax = best[i].t;
                 },
+                |leaf| self.prefetch_leaf(leaf),
             );
         }
         let base = self.base(PrimKind::Plane) as i32;
