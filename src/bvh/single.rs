@@ -196,7 +196,7 @@ impl Bvh8 {
     /// Starts fetching an interior node's bounds (the first three of its four cache lines), or
     /// a leaf's primitives by `touch`.
     #[inline(always)]
-    fn prefetch(&self, r: NodeRef, touch: &impl Fn(Leaf)) {
+    pub(super) fn prefetch(&self, r: NodeRef, touch: &impl Fn(Leaf)) {
         if r.is_leaf() {
             touch(r.as_leaf());
         } else {

@@ -125,13 +125,16 @@ impl Bvh8 {
     /// The closest hits of a stream of packets (at most [`MAX_STREAM`]): visits, for the
     /// active lanes, every leaf one of them may hit nearer than its `tmax` lane;
     /// `leaf(leaf, p, rays[p], lanes, tmax[p])` tests the leaf's primitives for `lanes` of
-    /// packet `p` and lowers their `tmax` where it finds nearer hits. Packets whose directions
-    /// do not share an octant are traversed one by one ([`Bvh8::closest_packet`]).
+    /// packet `p` and lowers their `tmax` where it finds nearer hits. Every child pushed for
+    /// later is prefetched: an interior node here, a leaf's primitives by `touch(leaf)`
+    /// (measured: PERF.md, "Prefetching pushed leaves"). Packets whose directions do not share
+    /// an octant are traversed one by one ([`Bvh8::closest_packet`]).
     pub fn closest_stream(
         &self,
         rays: &[RayPacket],
         tmax: &mut [F32x8],
         mut leaf: impl FnMut(Leaf, usize, &RayPacket, Mask, &mut F32x8),
+        touch: impl Fn(Leaf),
     ) {
         assert!(rays.len() <= MAX_STREAM && tmax.len() == rays.len());
         let mut packets = [Packet8::EMPTY; MAX_STREAM];
@@ -168,6 +171,7 @@ impl Bvh8 {
                     break;
                 }
                 for h in &hits[..count - 1] {
+                    self.prefetch(h.0, &touch);
                     stack.push(*h);
                 }
                 (node, mask) = (hits[count - 1].0, hits[count - 1].1);
@@ -178,13 +182,15 @@ impl Bvh8 {
     /// The occluded lanes of a stream of packets (at most [`MAX_STREAM`]), each before its
     /// `tmax` lane: `occluded[p]` gets the lanes of packet `p` that something blocks.
     /// `leaf(leaf, p, rays[p], lanes)` returns the lanes (of `lanes`) blocked by the leaf's
-    /// primitives; the walk ends once every active ray is blocked.
+    /// primitives; the walk ends once every active ray is blocked. Pushed children are
+    /// prefetched as in [`Bvh8::closest_stream`].
     pub fn occluded_stream(
         &self,
         rays: &[RayPacket],
         tmax: &[F32x8],
         occluded: &mut [Mask],
         mut leaf: impl FnMut(Leaf, usize, &RayPacket, Mask) -> Mask,
+        touch: impl Fn(Leaf),
     ) {
         assert!(rays.len() <= MAX_STREAM && tmax.len() == rays.len());
         assert!(occluded.len() == rays.len());
@@ -228,6 +234,7 @@ impl Bvh8 {
                     break;
                 }
                 for h in &hits[..count - 1] {
+                    self.prefetch(h.0, &touch);
                     stack.push((h.0, h.1));
                 }
                 (node, mask) = (hits[count - 1].0, hits[count - 1].1);

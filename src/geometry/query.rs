@@ -155,10 +155,12 @@ impl Geometry {
             (t[k], prim[k]) = (h.t, h.prim);
         }
         let n = rays.len();
-        self.bvh
-            .closest_stream(rays, &mut t[..n], |leaf, p, rays, lanes, t| {
-                self.closest_leaf_packet(leaf, rays, lanes, t, &mut prim[p])
-            });
+        self.bvh.closest_stream(
+            rays,
+            &mut t[..n],
+            |leaf, p, rays, lanes, t| self.closest_leaf_packet(leaf, rays, lanes, t, &mut prim[p]),
+            |leaf| self.prefetch_leaf(leaf),
+        );
         for (k, (r, h)) in rays.iter().zip(hits).enumerate() {
             (h.t, h.prim) = (t[k], prim[k]);
             self.closest_planes_packet(r, &mut h.t, &mut h.prim);
@@ -299,10 +301,13 @@ impl Geometry {
             }
             return;
         }
-        self.bvh
-            .occluded_stream(rays, tmax, occluded, |leaf, p, rays, lanes| {
-                self.occluded_leaf_packet(leaf, rays, lanes, tmax[p])
-            });
+        self.bvh.occluded_stream(
+            rays,
+            tmax,
+            occluded,
+            |leaf, p, rays, lanes| self.occluded_leaf_packet(leaf, rays, lanes, tmax[p]),
+            |leaf| self.prefetch_leaf(leaf),
+        );
         for ((r, t), o) in rays.iter().zip(tmax).zip(occluded) {
             *o |= self.occluded_planes_packet(r, !*o & r.active, *t);
         }
