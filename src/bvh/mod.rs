@@ -351,6 +351,20 @@ fn safe_inverse8(d: F32x8) -> F32x8 {
 }
 
 impl Bvh8 {
+    /// Starts fetching a child a walk pushes for later: an interior node's bounds (the first
+    /// three of its four cache lines), or a leaf's primitives by `touch` (the tree does not
+    /// know what its leaves index).
+    #[inline(always)]
+    fn prefetch(&self, r: NodeRef, touch: &impl Fn(Leaf)) {
+        if r.is_leaf() {
+            touch(r.as_leaf());
+        } else if let Some(n) = self.nodes.get(r.index()) {
+            for k in [0, 2, 4] {
+                crate::simd::prefetch(&n.bounds[k]);
+            }
+        }
+    }
+
     /// True when the tree holds nothing.
     pub fn is_empty(&self) -> bool {
         self.root.is_empty()

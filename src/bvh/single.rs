@@ -192,23 +192,6 @@ impl Bvh8 {
     }
 }
 
-impl Bvh8 {
-    /// Starts fetching an interior node's bounds (the first three of its four cache lines), or
-    /// a leaf's primitives by `touch`.
-    #[inline(always)]
-    pub(super) fn prefetch(&self, r: NodeRef, touch: &impl Fn(Leaf)) {
-        if r.is_leaf() {
-            touch(r.as_leaf());
-        } else {
-            if let Some(n) = self.nodes.get(r.index()) {
-                for k in [0, 2, 4] {
-                    crate::simd::prefetch(&n.bounds[k]);
-                }
-            }
-        }
-    }
-}
-
 /// Pops entries until one the ray may still enter before `tmax`.
 #[inline(always)]
 pub(super) fn pop_nearer(stack: &mut Stack<(NodeRef, f32), STACK>, tmax: f32) -> Option<NodeRef> {
