@@ -227,6 +227,25 @@ impl Plane {
     }
 }
 
+/// The slab test of rays that enter every box through planes `near` and leave through `far`
+/// (one octant): `t(plane, axis)` gives the distance to a plane. Returns the lanes that enter
+/// within `(tmin, tmax)` (the exit widened by the rounding error, [`widen8`]) and their entry
+/// distances. Shared by the single-ray test (lanes = children) and the packet's octant test
+/// (lanes = rays), so both round alike.
+#[inline(always)]
+fn slab_octant(
+    t: impl Fn(Plane, usize) -> F32x8,
+    near: &[Plane; 3],
+    far: &[Plane; 3],
+    tmin: F32x8,
+    tmax: F32x8,
+) -> (crate::simd::Mask, F32x8) {
+    use crate::simd::{le, max, min};
+    let entry = max(max(t(near[0], 0), t(near[1], 1)), max(t(near[2], 2), tmin));
+    let exit = min(min(t(far[0], 0), t(far[1], 1)), min(t(far[2], 2), tmax));
+    (le(entry, widen8(exit)), entry)
+}
+
 /// An interior node: its children's boxes structure of arrays and their references. Children
 /// occupy slots `0..n`; the other slots are [`NodeRef::EMPTY`] with the inverted box
 /// (`lo = +inf`, `hi = -inf`), which the slab test rejects for every ray direction.

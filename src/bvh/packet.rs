@@ -7,7 +7,7 @@
 use super::stack::Stack;
 use super::{
     Bvh8, HI, LO, Leaf, MAX_DEPTH, NoProbe, Node8, NodeRef, Plane, TraversalProbe, WIDTH,
-    safe_inverse8, widen8,
+    safe_inverse8, slab_octant, widen8,
 };
 use crate::packet::RayPacket;
 use crate::simd::{
@@ -78,15 +78,7 @@ impl Packet8 {
         );
         let t =
             |k: Plane, a: usize| (F32x8::splat(n.bounds[k as usize].as_array()[i]) - o[a]) * inv[a];
-        let near = max(
-            max(t(f.near[0], 0), t(f.near[1], 1)),
-            max(t(f.near[2], 2), tmin),
-        );
-        let far = min(
-            min(t(f.far[0], 0), t(f.far[1], 1)),
-            min(t(f.far[2], 2), tmax),
-        );
-        (le(near, widen8(far)), near)
+        slab_octant(t, &f.near, &f.far, tmin, tmax)
     }
 
     /// [`Packet8::test`] for a box given as an [`Aabb`].

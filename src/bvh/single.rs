@@ -3,9 +3,11 @@
 //! min/max), hit children are visited nearest first (closest hit) or in slot order (any hit).
 
 use super::stack::Stack;
-use super::{Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, WIDTH, safe_inverse, widen, widen8};
+use super::{
+    Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, WIDTH, safe_inverse, slab_octant, widen,
+};
 use crate::math::Ray;
-use crate::simd::{F32x8, bitmask, le, max, min};
+use crate::simd::{F32x8, bitmask};
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
 /// than it pops.
@@ -46,15 +48,8 @@ impl Ray1 {
         let t = |plane: Plane, axis: usize| {
             (n.bounds[plane as usize] - self.org[axis]) * self.inv[axis]
         };
-        let near = max(
-            max(t(self.near[0], 0), t(self.near[1], 1)),
-            max(t(self.near[2], 2), tmin),
-        );
-        let far = min(
-            min(t(self.far[0], 0), t(self.far[1], 1)),
-            min(t(self.far[2], 2), tmax),
-        );
-        (bitmask(le(near, widen8(far))), near)
+        let (enter, near) = slab_octant(t, &self.near, &self.far, tmin, tmax);
+        (bitmask(enter), near)
     }
 }
 
