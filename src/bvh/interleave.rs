@@ -50,6 +50,16 @@ impl Bvh8 {
                 stack: Stack::new(),
             }
         };
+        // a walk's next ray reuses its storage: a new `Walk` moved in would copy the stack
+        let restart = |w: &mut Walk, i: usize| {
+            let (r, tmin, tmax) = ray(i);
+            w.ray = Ray1::new(&r);
+            w.tmin = F32x8::splat(tmin);
+            w.tmax = tmax;
+            w.cur = self.root;
+            w.index = i;
+            w.stack.clear();
+        };
         let mut next = 0;
         let mut walks: [Option<Walk>; IN_FLIGHT] = std::array::from_fn(|_| {
             (next < n).then(|| {
@@ -73,7 +83,7 @@ impl Bvh8 {
                 match step.or_else(|| pop_nearer(&mut w.stack, w.tmax)) {
                     Some(c) => w.cur = c,
                     None if next < n => {
-                        *w = start(next);
+                        restart(w, next);
                         next += 1;
                     }
                     None => {

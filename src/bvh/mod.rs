@@ -214,6 +214,22 @@ impl Plane {
         [Plane::HiX, Plane::HiY, Plane::HiZ],
     ];
 
+    /// `[octant][axis]`: the planes a ray enters through, bit `axis` of `octant` set when its
+    /// direction component on `axis` is negative (`octant ^ 7` gives the exit planes).
+    const ENTRY_OF_OCTANT: [[Plane; 3]; 8] = {
+        let mut t = [[Plane::LoX; 3]; 8];
+        let mut octant = 0;
+        while octant < 8 {
+            let mut axis = 0;
+            while axis < 3 {
+                t[octant][axis] = Self::ENTRY[(octant >> axis) & 1][axis];
+                axis += 1;
+            }
+            octant += 1;
+        }
+        t
+    };
+
     /// The plane a ray enters its boxes through on `axis`.
     #[inline(always)]
     fn entry(axis: usize, down: bool) -> Plane {
@@ -228,22 +244,30 @@ impl Plane {
 }
 
 /// The slab test of rays that enter every box through planes `near` and leave through `far`
-/// (one octant): `t(plane, axis)` gives the distance to a plane. Returns the lanes that enter
-/// within `(tmin, tmax)` (the exit widened by the rounding error, [`widen8`]) and their entry
-/// distances. Shared by the single-ray test (lanes = children) and the packet's octant test
-/// (lanes = rays), so both round alike.
+/// (one octant): `entry(plane, axis)` and `exit(plane, axis)` give the distances to an entry and
+/// an exit plane, in error by at most the relative rounding the widening covers ([`ROBUST`]).
+/// Returns the lanes that enter within `(tmin, tmax)` (the exit widened by that error,
+/// [`widen8`]) and their entry distances. Shared by the single-ray test (lanes = children) and
+/// the packet's octant test (lanes = rays).
 #[inline(always)]
 fn slab_octant(
-    t: impl Fn(Plane, usize) -> F32x8,
+    entry: impl Fn(Plane, usize) -> F32x8,
+    exit: impl Fn(Plane, usize) -> F32x8,
     near: &[Plane; 3],
     far: &[Plane; 3],
     tmin: F32x8,
     tmax: F32x8,
 ) -> (crate::simd::Mask, F32x8) {
     use crate::simd::{le, max, min};
-    let entry = max(max(t(near[0], 0), t(near[1], 1)), max(t(near[2], 2), tmin));
-    let exit = min(min(t(far[0], 0), t(far[1], 1)), min(t(far[2], 2), tmax));
-    (le(entry, widen8(exit)), entry)
+    let t0 = max(
+        max(entry(near[0], 0), entry(near[1], 1)),
+        max(entry(near[2], 2), tmin),
+    );
+    let t1 = min(
+        min(exit(far[0], 0), exit(far[1], 1)),
+        min(exit(far[2], 2), tmax),
+    );
+    (le(t0, widen8(t1)), t0)
 }
 
 /// An interior node: its children's boxes structure of arrays and their references. Children

@@ -53,7 +53,8 @@ impl Packet8 {
     }
 
     /// Lanes whose ray meets child `i`'s box within `(tmin, tmax)`, and their entry distances
-    /// (the single-ray test's arithmetic, lane by lane).
+    /// (`(plane - origin) * inv` lane by lane; the single-ray test's fused form errs to the same
+    /// safe side, so both enter every box their ray meets).
     #[inline(always)]
     pub(super) fn test(&self, n: &Node8, i: usize, tmin: F32x8, tmax: F32x8) -> (Mask, F32x8) {
         self.test_planes(|k| n.bounds[k].as_array()[i], tmin, tmax)
@@ -78,7 +79,7 @@ impl Packet8 {
         );
         let t =
             |k: Plane, a: usize| (F32x8::splat(n.bounds[k as usize].as_array()[i]) - o[a]) * inv[a];
-        slab_octant(t, &f.near, &f.far, tmin, tmax)
+        slab_octant(t, t, &f.near, &f.far, tmin, tmax)
     }
 
     /// [`Packet8::test`] for a box given as an [`Aabb`].

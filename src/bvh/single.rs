@@ -7,17 +7,26 @@ use super::{
     Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, WIDTH, safe_inverse, slab_octant, widen,
 };
 use crate::math::Ray;
-use crate::simd::{F32x8, bitmask};
+use crate::simd::{F32x8, bitmask, fused_mul_sub};
+use glam::Vec3A;
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
 /// than it pops.
 pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 
-/// One ray prepared for 8-wide box tests: splatted origin and reciprocal direction, and the
-/// box planes it enters (`near`) and leaves (`far`) through on each axis.
+/// One ray prepared for 8-wide box tests: splatted reciprocal direction, the box planes it
+/// enters (`near`) and leaves (`far`) through on each axis, and `origin * inv` on each axis
+/// rounded up for the entry planes and down for the exit planes.
+///
+/// A plane's distance is then `plane * inv - o_inv` in one fused operation. Its product is
+/// exact and the rounded-up (entry) or rounded-down (exit) `o_inv` errs only to the safe side,
+/// so the one rounding left is relative to the distance itself, like that of the inverse:
+/// the widening of the exit distance covers both ([`super::ROBUST`]). Embree's kernels use this
+/// form without the directed offsets (and without widening).
 pub(super) struct Ray1 {
-    org: [F32x8; 3],
     inv: [F32x8; 3],
+    oi_near: [F32x8; 3],
+    oi_far: [F32x8; 3],
     near: [Plane; 3],
     far: [Plane; 3],
 }
@@ -31,26 +40,46 @@ impl Ray1 {
     /// From an origin and the safe reciprocal direction ([`safe_inverse`]).
     #[inline(always)]
     pub(super) fn from_parts(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
-        let down = inv.map(|i| i < 0.0);
+        let (up, down) = directed_product(Vec3A::from_array(o), Vec3A::from_array(inv));
+        let octant = Vec3A::from_array(inv).cmplt(Vec3A::ZERO).bitmask() as usize;
         Ray1 {
-            org: o.map(F32x8::splat),
             inv: inv.map(F32x8::splat),
-            near: std::array::from_fn(|a| Plane::entry(a, down[a])),
-            far: std::array::from_fn(|a| Plane::exit(a, down[a])),
+            oi_near: up.to_array().map(F32x8::splat),
+            oi_far: down.to_array().map(F32x8::splat),
+            near: Plane::ENTRY_OF_OCTANT[octant],
+            far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
     }
 
     /// The children the ray enters within `(tmin, tmax)` (bit `i` = child `i`) and their entry
-    /// distances. `(plane - origin) * inv`, not a fused `plane * inv - origin * inv`, keeps the
-    /// error relative to the distance itself, which the widening of the exit distance covers.
+    /// distances (never above the exact ones).
     #[inline(always)]
     pub(super) fn test(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> (u32, F32x8) {
-        let t = |plane: Plane, axis: usize| {
-            (n.bounds[plane as usize] - self.org[axis]) * self.inv[axis]
+        let entry = |plane: Plane, axis: usize| {
+            fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_near[axis])
         };
-        let (enter, near) = slab_octant(t, &self.near, &self.far, tmin, tmax);
+        let exit = |plane: Plane, axis: usize| {
+            fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_far[axis])
+        };
+        let (enter, near) = slab_octant(entry, exit, &self.near, &self.far, tmin, tmax);
         (bitmask(enter), near)
     }
+}
+
+/// `o * inv` on each axis rounded up and rounded down: the rounded product moved away by two
+/// of its units in the last place, more than its rounding error (half a unit) plus that of the
+/// move; the absolute term covers products that round to a subnormal or zero. An infinite
+/// product gives `(+inf, -inf)`, so that axis culls nothing: its entry distances are `-inf`,
+/// its exit ones `+inf`.
+#[inline(always)]
+fn directed_product(o: Vec3A, inv: Vec3A) -> (Vec3A, Vec3A) {
+    let p = o * inv;
+    let slack = p.abs() * (2.0 * f32::EPSILON) + Vec3A::splat(f32::MIN_POSITIVE);
+    let finite = p.is_finite_mask();
+    (
+        Vec3A::select(finite, p + slack, Vec3A::INFINITY),
+        Vec3A::select(finite, p - slack, Vec3A::NEG_INFINITY),
+    )
 }
 
 impl Bvh8 {
@@ -211,5 +240,103 @@ fn sort_farthest_first(s: &mut [(NodeRef, f32)]) {
             j -= 1;
         }
         s[j] = x;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Ray1;
+    use crate::bvh::{Aabb, Node8, NodeRef, WIDTH};
+    use crate::math::{Ray, Vec3};
+    use crate::simd::F32x8;
+
+    /// A small deterministic generator (xorshift), values in `[lo, hi)`.
+    struct Rng(u32);
+
+    impl Rng {
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            lo + (hi - lo) * f64::from(self.0 >> 8) / f64::from(1u32 << 24)
+        }
+    }
+
+    /// Whether the ray `o + t d`, `t` in `[tmin, tmax]`, meets the closed box, in `f64` (exact
+    /// reciprocals, no widening), and by how much: the length of the overlap of its slabs
+    /// relative to the distances involved (negative for a miss).
+    fn enters(o: Vec3, d: Vec3, b: &Aabb, tmin: f64, tmax: f64) -> f64 {
+        let (mut t0, mut t1) = (tmin, tmax);
+        for a in 0..3 {
+            let (o, d) = (f64::from(o[a]), f64::from(d[a]));
+            let (lo, hi) = (f64::from(b.min[a]), f64::from(b.max[a]));
+            if d == 0.0 {
+                if o < lo || o > hi {
+                    return -1.0;
+                }
+                continue;
+            }
+            let (x, y) = ((lo - o) / d, (hi - o) / d);
+            (t0, t1) = (t0.max(x.min(y)), t1.min(x.max(y)));
+        }
+        (t1 - t0) / t0.abs().max(t1.abs()).max(1e-30)
+    }
+
+    /// The 8-wide node test never culls a child box the ray meets, by however little: origins
+    /// far from the boxes (up to 1e6, where `origin * inv` carries a large absolute error),
+    /// direction components of zero, boxes only grazed, negative `tmin` (orthographic rays).
+    /// Boxes are stored unpadded, so only the test's own error bound is exercised.
+    #[test]
+    fn the_node_test_never_culls_a_box_the_ray_meets() {
+        let mut rng = Rng(0x2545_f491);
+        let (mut met, mut grazed) = (0, 0);
+        for case in 0..20_000 {
+            let scale = [1.0, 1e2, 1e4, 1e6][case % 4];
+            let o = Vec3::from_array(std::array::from_fn(|_| rng.range(-scale, scale) as f32));
+            let mut d: [f32; 3] = std::array::from_fn(|_| rng.range(-1.0, 1.0) as f32);
+            if case % 5 == 0 {
+                d[case / 5 % 3] = 0.0;
+            }
+            let d = Vec3::from_array(d).normalize_or(Vec3::X);
+            let tmin = [1e-4, 0.0, -1e3][case % 3];
+            let tmax = if case % 7 == 0 { 1e3 } else { f64::INFINITY };
+            // boxes around points of the ray, of every size relative to the distance, nudged
+            // sideways so that many are only grazed
+            let boxes: [Aabb; WIDTH] = std::array::from_fn(|_| {
+                let t = rng.range(-0.5, 2.0) * 2.0 * scale;
+                let size = scale * 10f64.powf(rng.range(-7.0, 0.0));
+                let p: [f64; 3] = std::array::from_fn(|a| {
+                    f64::from(o[a]) + t * f64::from(d[a]) + size * rng.range(-1.0, 1.0)
+                });
+                let lo = p.map(|x| (x - size * rng.range(0.0, 1.0)) as f32);
+                let hi = p.map(|x| (x + size * rng.range(0.0, 1.0)) as f32);
+                Aabb {
+                    min: Vec3::from_array(lo),
+                    max: Vec3::from_array(hi),
+                }
+            });
+            let mut n = Node8::new(&[(NodeRef::EMPTY, boxes[0]); WIDTH]);
+            for a in 0..3 {
+                n.bounds[a] = F32x8::new(boxes.map(|b| b.min[a]));
+                n.bounds[3 + a] = F32x8::new(boxes.map(|b| b.max[a]));
+            }
+            let r = Ray1::new(&Ray::new(o, d));
+            let (mask, _) = r.test(&n, F32x8::splat(tmin as f32), F32x8::splat(tmax as f32));
+            for (i, b) in boxes.iter().enumerate() {
+                let overlap = enters(o, d, b, tmin, tmax);
+                if overlap >= 1e-12 {
+                    met += 1;
+                    grazed += usize::from(overlap < 1e-4);
+                    assert!(
+                        mask >> i & 1 == 1,
+                        "case {case}: box {b:?} culled, ray {o} + t {d}, overlap {overlap:e}"
+                    );
+                }
+            }
+        }
+        assert!(
+            met > 40_000 && grazed > 10_000,
+            "{met} boxes met, {grazed} grazed"
+        );
     }
 }
