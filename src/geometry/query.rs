@@ -205,57 +205,68 @@ impl Geometry {
     /// ([`crate::bvh::Bvh8::closest_many`]); the same answers as [`Geometry::closest_hit`].
     fn closest_hit_singles(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
         const N: usize = MAX_STREAM * LANES;
-        let mut list = [(Ray::new(Vec3::ZERO, Vec3::ZERO), 0.0f32); N];
+        // the active lanes, (packet, lane), and their closest hits so far
+        let mut slot = [(0usize, 0usize); N];
         let mut best = [Best { t: 0.0, prim: -1 }; N];
-        let mut slot = [(0u8, 0u8); N];
         let mut n = 0;
         for (p, (r, h)) in rays.iter().zip(hits.iter()).enumerate() {
-            let (ts, prims, tmin) = (lanes(h.t), crate::simd::lanes_i32(h.prim), lanes(r.tmin));
-            let active = bitmask(r.active);
-            for l in 0..LANES {
-                if active >> l & 1 == 1 {
-                    list[n] = (r.ray(l), tmin[l]);
-                    best[n] = Best {
-                        t: ts[l],
-                        prim: prims[l],
-                    };
-                    slot[n] = (p as u8, l as u8);
-                    n += 1;
-                }
+            let (ts, prims) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+            let mut active = bitmask(r.active);
+            while active != 0 {
+                let l = active.trailing_zeros() as usize;
+                active &= active - 1;
+                slot[n] = (p, l);
+                best[n] = Best {
+                    t: ts[l],
+                    prim: prims[l],
+                };
+                n += 1;
             }
         }
+        let ray = |i: usize| {
+            let (p, l) = slot[i];
+            (rays[p].ray(l), rays[p].tmin.as_array()[l])
+        };
         if self.bvh.is_empty() {
-            for ((ray, tmin), b) in list[..n].iter().zip(&mut best) {
-                self.closest_brute(ray, *tmin, b);
+            for (i, b) in best[..n].iter_mut().enumerate() {
+                let (r, tmin) = ray(i);
+                self.closest_brute(&r, tmin, b);
             }
         } else {
             let start: [f32; N] = std::array::from_fn(|i| best[i].t);
             self.bvh.closest_many(
                 n,
-                |i| (list[i].0, list[i].1, start[i]),
+                |i| {
+                    let (r, tmin) = ray(i);
+                    (r, tmin, start[i])
+                },
                 |i, leaf, tmax| {
-                    self.closest_leaf(leaf, &list[i].0, list[i].1, &mut best[i]);
+                    let (r, tmin) = ray(i);
+                    self.closest_leaf(leaf, &r, tmin, &mut best[i]);
                     *tmax = best[i].t;
                 },
                 |leaf| self.prefetch_leaf(leaf),
             );
         }
         let base = self.base(PrimKind::Plane) as i32;
-        for ((ray, tmin), b) in list[..n].iter().zip(&mut best) {
-            for i in self.planes_range() {
-                let (pn, d) = (self.planes.normal(i), self.planes.offset[i]);
-                if let Some(t) = intersect_plane(pn, d, ray, *tmin, f32::INFINITY) {
-                    b.take(t, base + i as i32);
+        if !self.planes.is_empty() {
+            for (i, b) in best[..n].iter_mut().enumerate() {
+                let (r, tmin) = ray(i);
+                for k in self.planes_range() {
+                    let (pn, d) = (self.planes.normal(k), self.planes.offset[k]);
+                    if let Some(t) = intersect_plane(pn, d, &r, tmin, f32::INFINITY) {
+                        b.take(t, base + k as i32);
+                    }
                 }
             }
         }
-        let mut t: [[f32; LANES]; MAX_STREAM] =
-            std::array::from_fn(|p| lanes(hits.get(p).map_or(F32x8::ZERO, |h| h.t)));
-        let mut prim: [[i32; LANES]; MAX_STREAM] = std::array::from_fn(|p| {
-            crate::simd::lanes_i32(hits.get(p).map_or(I32x8::ZERO, |h| h.prim))
-        });
-        for (k, &(p, l)) in slot[..n].iter().enumerate() {
-            (t[p as usize][l as usize], prim[p as usize][l as usize]) = (best[k].t, best[k].prim);
+        let mut t: [[f32; LANES]; MAX_STREAM] = [[0.0; LANES]; MAX_STREAM];
+        let mut prim: [[i32; LANES]; MAX_STREAM] = [[0; LANES]; MAX_STREAM];
+        for (p, h) in hits.iter().enumerate() {
+            (t[p], prim[p]) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+        }
+        for (&(p, l), b) in slot[..n].iter().zip(&best) {
+            (t[p][l], prim[p][l]) = (b.t, b.prim);
         }
         for (p, h) in hits.iter_mut().enumerate() {
             (h.t, h.prim) = (F32x8::new(t[p]), I32x8::new(prim[p]));
