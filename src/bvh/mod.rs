@@ -57,8 +57,11 @@ impl TraversalProbe for NoProbe {
 pub const MAX_DEPTH: usize = 40;
 
 /// Relative widening of the slab test's exit distance, so that rounding never culls a box a
-/// ray touches (1 + 2 gamma(3), Pharr et al.).
-const ROBUST: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+/// ray touches: a distance carries at most three relative roundings (reciprocal, difference,
+/// product; the fused single-ray form two), which the entry may err up and the exit down, and
+/// the widening itself rounds twice, so `1 + 2 gamma(4)` (Pharr et al.'s `gamma(n)` =
+/// `n u / (1 - n u)`; `1 + 2 gamma(3)` alone left the widening's own rounding uncovered).
+const ROBUST: f32 = 1.0 + 2.0 * (4.0 * f32::EPSILON * 0.5) / (1.0 - 4.0 * f32::EPSILON * 0.5);
 
 /// An axis-aligned box.
 #[derive(Clone, Copy, Debug, PartialEq)]
