@@ -52,7 +52,7 @@ impl Ray1 {
     }
 
     /// The children the ray enters within `(tmin, tmax)` (bit `i` = child `i`) and their entry
-    /// distances (never above the exact ones).
+    /// distances (above the exact ones by at most the relative rounding the widening covers).
     #[inline(always)]
     pub(super) fn test(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> (u32, F32x8) {
         let entry = |plane: Plane, axis: usize| {
