@@ -28,6 +28,9 @@ mod single;
 mod stack;
 mod stream;
 
+#[cfg(test)]
+mod test_rng;
+
 pub use interleave::IN_FLIGHT;
 pub use packet::PACKET_STACK_DEPTH;
 pub use stream::{MAX_STREAM, StreamMasks};

@@ -437,26 +437,11 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::{Frustum, Packet8};
+    use crate::bvh::test_rng::Rng;
     use crate::bvh::{Aabb, Node8, NodeRef};
     use crate::math::{Ray, Vec3};
     use crate::packet::RayPacket;
     use crate::simd::{LANES, bitmask, lanes, mask_first};
-
-    /// A small deterministic generator (xorshift), values in `[lo, hi)`.
-    struct Rng(u32);
-
-    impl Rng {
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 17;
-            self.0 ^= self.0 << 5;
-            lo + (hi - lo) * (self.0 >> 8) as f32 / (1u32 << 24) as f32
-        }
-
-        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
-            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-        }
-    }
 
     /// For rays sharing an octant, the octant test gives the general slab test's bits (mask
     /// and entry distances) for every child and every count of active lanes, directions

@@ -246,21 +246,10 @@ fn sort_farthest_first(s: &mut [(NodeRef, f32)]) {
 #[cfg(test)]
 mod tests {
     use super::Ray1;
+    use crate::bvh::test_rng::Rng;
     use crate::bvh::{Aabb, Node8, NodeRef, WIDTH};
     use crate::math::{Ray, Vec3};
     use crate::simd::F32x8;
-
-    /// A small deterministic generator (xorshift), values in `[lo, hi)`.
-    struct Rng(u32);
-
-    impl Rng {
-        fn range(&mut self, lo: f64, hi: f64) -> f64 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 17;
-            self.0 ^= self.0 << 5;
-            lo + (hi - lo) * f64::from(self.0 >> 8) / f64::from(1u32 << 24)
-        }
-    }
 
     /// Whether the ray `o + t d`, `t` in `[tmin, tmax]`, meets the closed box, in `f64` (exact
     /// reciprocals, no widening), and by how much: the length of the overlap of its slabs
@@ -292,8 +281,8 @@ mod tests {
         let (mut met, mut grazed) = (0, 0);
         for case in 0..20_000 {
             let scale = [1.0, 1e2, 1e4, 1e6][case % 4];
-            let o = Vec3::from_array(std::array::from_fn(|_| rng.range(-scale, scale) as f32));
-            let mut d: [f32; 3] = std::array::from_fn(|_| rng.range(-1.0, 1.0) as f32);
+            let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-scale, scale) as f32));
+            let mut d: [f32; 3] = std::array::from_fn(|_| rng.range64(-1.0, 1.0) as f32);
             if case % 5 == 0 {
                 d[case / 5 % 3] = 0.0;
             }
@@ -303,13 +292,13 @@ mod tests {
             // boxes around points of the ray, of every size relative to the distance, nudged
             // sideways so that many are only grazed
             let boxes: [Aabb; WIDTH] = std::array::from_fn(|_| {
-                let t = rng.range(-0.5, 2.0) * 2.0 * scale;
-                let size = scale * 10f64.powf(rng.range(-7.0, 0.0));
+                let t = rng.range64(-0.5, 2.0) * 2.0 * scale;
+                let size = scale * 10f64.powf(rng.range64(-7.0, 0.0));
                 let p: [f64; 3] = std::array::from_fn(|a| {
-                    f64::from(o[a]) + t * f64::from(d[a]) + size * rng.range(-1.0, 1.0)
+                    f64::from(o[a]) + t * f64::from(d[a]) + size * rng.range64(-1.0, 1.0)
                 });
-                let lo = p.map(|x| (x - size * rng.range(0.0, 1.0)) as f32);
-                let hi = p.map(|x| (x + size * rng.range(0.0, 1.0)) as f32);
+                let lo = p.map(|x| (x - size * rng.range64(0.0, 1.0)) as f32);
+                let hi = p.map(|x| (x + size * rng.range64(0.0, 1.0)) as f32);
                 Aabb {
                     min: Vec3::from_array(lo),
                     max: Vec3::from_array(hi),
