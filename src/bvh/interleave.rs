@@ -33,6 +33,21 @@ impl Bvh8 {
         &self,
         n: usize,
         ray: impl Fn(usize) -> (Ray, f32, f32),
+        leaf: impl FnMut(usize, Leaf, &mut f32),
+        touch: impl Fn(Leaf),
+    ) {
+        if (0..n).all(|i| ray(i).1 >= 0.0) {
+            self.closest_many_walks::<true>(n, ray, leaf, touch);
+        } else {
+            self.closest_many_walks::<false>(n, ray, leaf, touch);
+        }
+    }
+
+    /// [`Bvh8::closest_many`], `FORWARD` when every `tmin >= 0` ([`super::widen_exit`]).
+    fn closest_many_walks<const FORWARD: bool>(
+        &self,
+        n: usize,
+        ray: impl Fn(usize) -> (Ray, f32, f32),
         mut leaf: impl FnMut(usize, Leaf, &mut f32),
         touch: impl Fn(Leaf),
     ) {
@@ -78,7 +93,7 @@ impl Bvh8 {
                     None
                 } else {
                     let node = &self.nodes[w.cur.index()];
-                    self.descend(&w.ray, node, w.tmin, w.tmax, &mut w.stack, &touch)
+                    self.descend::<FORWARD>(&w.ray, node, w.tmin, w.tmax, &mut w.stack, &touch)
                 };
                 match step.or_else(|| pop_nearer(&mut w.stack, w.tmax)) {
                     Some(c) => w.cur = c,

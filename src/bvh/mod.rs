@@ -253,10 +253,10 @@ impl Plane {
 /// (one octant): `entry(plane, axis)` and `exit(plane, axis)` give the distances to an entry and
 /// an exit plane, in error by at most the relative rounding the widening covers ([`ROBUST`]).
 /// Returns the lanes that enter within `(tmin, tmax)` (the exit widened by that error,
-/// [`widen8`]) and their entry distances. Shared by the single-ray test (lanes = children) and
-/// the packet's octant test (lanes = rays).
+/// [`widen_exit`]) and their entry distances. Shared by the single-ray test (lanes = children)
+/// and the packet's octant test (lanes = rays). `FORWARD` promises `tmin >= 0` in every lane.
 #[inline(always)]
-fn slab_octant(
+fn slab_octant<const FORWARD: bool>(
     entry: impl Fn(Plane, usize) -> F32x8,
     exit: impl Fn(Plane, usize) -> F32x8,
     near: &[Plane; 3],
@@ -273,7 +273,7 @@ fn slab_octant(
         min(exit(far[0], 0), exit(far[1], 1)),
         min(exit(far[2], 2), tmax),
     );
-    (le(t0, widen8(t1)), t0)
+    (le(t0, widen_exit::<FORWARD>(t1)), t0)
 }
 
 /// An interior node: its children's boxes structure of arrays and their references. Children
@@ -373,10 +373,26 @@ fn widen(t: f32) -> f32 {
     t + t.abs() * (ROBUST - 1.0)
 }
 
-/// [`widen`] for 8 lanes.
+/// [`widen`] for 8 lanes, in one multiplication's latency: `t * ROBUST` for `t >= 0`, `t * (2 -
+/// ROBUST)` below, the larger of the two. `ROBUST - 1` is a power of two, so for normal `t`
+/// both products round to the same value as [`widen`]'s sum (its scaled term is exact).
 #[inline(always)]
 fn widen8(t: F32x8) -> F32x8 {
-    t + t.abs() * F32x8::splat(ROBUST - 1.0)
+    crate::simd::max(t * F32x8::splat(ROBUST), t * F32x8::splat(2.0 - ROBUST))
+}
+
+/// The widened exit distance of a slab test, where `FORWARD` promises entry distances of at
+/// least 0 (`tmin >= 0`, every ray but an orthographic camera's): there a negative exit culls
+/// the box however it is widened, so `t * ROBUST`, [`widen8`]'s product for `t >= 0`, decides
+/// the same lanes in one multiplication (the exit widening is on the walk's chain of dependent
+/// operations: PERF.md, "Widening in one product").
+#[inline(always)]
+fn widen_exit<const FORWARD: bool>(t: F32x8) -> F32x8 {
+    if FORWARD {
+        t * F32x8::splat(ROBUST)
+    } else {
+        widen8(t)
+    }
 }
 
 /// The reciprocal of a direction component, with zero replaced by a tiny value of the same
@@ -532,6 +548,55 @@ impl Bvh8 {
         match seen.iter().position(|s| !s) {
             Some(p) => Err(format!("primitive {p} in no leaf")),
             None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ROBUST, widen, widen8};
+    use crate::bvh::test_rng::Rng;
+    use crate::simd::{F32x8, lanes};
+
+    /// The 8-lane widening (two products and a max) gives the scalar one's value (a sum) for
+    /// every sign and scale of distance down to 1e-30 (below, the scalar's scaled term is no
+    /// longer exact), zero and `+inf`: the packet, stream and single-ray tests keep culling
+    /// what they culled; and at every scale it widens by the relative amount it promises.
+    #[test]
+    fn the_8_lane_widening_equals_the_scalar_one() {
+        assert_eq!(
+            (ROBUST - 1.0).to_bits() & 0x007f_ffff,
+            0,
+            "ROBUST - 1 is a power of two"
+        );
+        let mut rng = Rng(0x9e37_79b9);
+        let mut ts = vec![
+            0.0,
+            1.0,
+            -1.0,
+            f32::MAX,
+            -f32::MAX,
+            f32::MIN_POSITIVE,
+            f32::INFINITY,
+        ];
+        ts.extend((0..40_000).map(|_| {
+            let t = 10f64.powf(rng.range64(-37.0, 38.0)) as f32;
+            if rng.range64(0.0, 1.0) < 0.5 { -t } else { t }
+        }));
+        for chunk in ts.chunks(8) {
+            let mut t = [0.0f32; 8];
+            t[..chunk.len()].copy_from_slice(chunk);
+            for (x, w) in t.iter().zip(lanes(widen8(F32x8::new(t)))) {
+                assert!(w >= *x, "{x:e} widened to {w:e}");
+                if x.abs() >= 1e-30 || *x == 0.0 {
+                    assert_eq!(w, widen(*x), "{x:e}");
+                }
+                // one rounding (half a unit, 2^-24 relative) of the exact product: at least 7/8 of it
+                let (x64, c) = (f64::from(*x), f64::from(ROBUST - 1.0));
+                if x.is_finite() {
+                    assert!(f64::from(w) >= x64 + x64.abs() * c * (7.0 / 8.0), "{x:e}");
+                }
+            }
         }
     }
 }

@@ -53,15 +53,21 @@ impl Ray1 {
 
     /// The children the ray enters within `(tmin, tmax)` (bit `i` = child `i`) and their entry
     /// distances (above the exact ones by at most the relative rounding the widening covers).
+    /// `FORWARD` promises `tmin >= 0` ([`super::widen_exit`]); either way the same children.
     #[inline(always)]
-    pub(super) fn test(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> (u32, F32x8) {
+    pub(super) fn test<const FORWARD: bool>(
+        &self,
+        n: &Node8,
+        tmin: F32x8,
+        tmax: F32x8,
+    ) -> (u32, F32x8) {
         let entry = |plane: Plane, axis: usize| {
             fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_near[axis])
         };
         let exit = |plane: Plane, axis: usize| {
             fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_far[axis])
         };
-        let (enter, near) = slab_octant(entry, exit, &self.near, &self.far, tmin, tmax);
+        let (enter, near) = slab_octant::<FORWARD>(entry, exit, &self.near, &self.far, tmin, tmax);
         (bitmask(enter), near)
     }
 }
@@ -87,7 +93,17 @@ impl Bvh8 {
     /// nearest child first; `leaf(leaf, tmax)` tests the leaf's primitives and lowers `tmax`
     /// where it finds a nearer hit.
     #[inline(always)]
-    pub fn closest(
+    pub fn closest(&self, ray: &Ray, tmin: f32, tmax: &mut f32, leaf: impl FnMut(Leaf, &mut f32)) {
+        if tmin >= 0.0 {
+            self.closest_walk::<true>(ray, tmin, tmax, leaf);
+        } else {
+            self.closest_walk::<false>(ray, tmin, tmax, leaf);
+        }
+    }
+
+    /// [`Bvh8::closest`], `FORWARD` when `tmin >= 0` ([`super::widen_exit`]).
+    #[inline(always)]
+    fn closest_walk<const FORWARD: bool>(
         &self,
         ray: &Ray,
         tmin: f32,
@@ -107,7 +123,7 @@ impl Bvh8 {
                 None
             } else {
                 let node = &self.nodes[cur.index()];
-                self.descend(&r, node, tmin8, *tmax, &mut stack, &|_| {})
+                self.descend::<FORWARD>(&r, node, tmin8, *tmax, &mut stack, &|_| {})
             };
             cur = match next {
                 Some(c) => c,
@@ -123,7 +139,7 @@ impl Bvh8 {
     /// enters before `tmax`, the other entered children pushed farthest first; `None` when it
     /// enters none. Pushed interior nodes are prefetched here, pushed leaves by `touch`.
     #[inline(always)]
-    pub(super) fn descend(
+    pub(super) fn descend<const FORWARD: bool>(
         &self,
         r: &Ray1,
         n: &Node8,
@@ -132,7 +148,7 @@ impl Bvh8 {
         stack: &mut Stack<(NodeRef, f32), STACK>,
         touch: &impl Fn(Leaf),
     ) -> Option<NodeRef> {
-        let (mask, near) = r.test(n, tmin8, F32x8::splat(tmax));
+        let (mask, near) = r.test::<FORWARD>(n, tmin8, F32x8::splat(tmax));
         if mask == 0 {
             return None;
         }
@@ -179,6 +195,22 @@ impl Bvh8 {
         ray: &Ray,
         tmin: f32,
         tmax: f32,
+        leaf: impl FnMut(Leaf) -> bool,
+    ) -> bool {
+        if tmin >= 0.0 {
+            self.occluded_walk::<true>(ray, tmin, tmax, leaf)
+        } else {
+            self.occluded_walk::<false>(ray, tmin, tmax, leaf)
+        }
+    }
+
+    /// [`Bvh8::occluded`], `FORWARD` when `tmin >= 0` ([`super::widen_exit`]).
+    #[inline(always)]
+    fn occluded_walk<const FORWARD: bool>(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: f32,
         mut leaf: impl FnMut(Leaf) -> bool,
     ) -> bool {
         if self.root.is_empty() {
@@ -195,7 +227,7 @@ impl Bvh8 {
                 }
             } else {
                 let n = &self.nodes[cur.index()];
-                let (mut mask, _) = r.test(n, tmin8, tmax8);
+                let (mut mask, _) = r.test::<FORWARD>(n, tmin8, tmax8);
                 if mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -274,11 +306,12 @@ mod tests {
     /// The 8-wide node test never culls a child box the ray meets, by however little: origins
     /// far from the boxes (up to 1e6, where `origin * inv` carries a large absolute error),
     /// direction components of zero, boxes only grazed, negative `tmin` (orthographic rays).
-    /// Boxes are stored unpadded, so only the test's own error bound is exercised.
+    /// Boxes are stored unpadded, so only the test's own error bound is exercised. For
+    /// `tmin >= 0` the forward test (one-product widening) answers exactly as the general one.
     #[test]
     fn the_node_test_never_culls_a_box_the_ray_meets() {
         let mut rng = Rng(0x2545_f491);
-        let (mut met, mut grazed) = (0, 0);
+        let (mut met, mut grazed, mut forward) = (0, 0, 0);
         for case in 0..20_000 {
             let scale = [1.0, 1e2, 1e4, 1e6][case % 4];
             let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-scale, scale) as f32));
@@ -310,7 +343,18 @@ mod tests {
                 n.bounds[3 + a] = F32x8::new(boxes.map(|b| b.max[a]));
             }
             let r = Ray1::new(&Ray::new(o, d));
-            let (mask, _) = r.test(&n, F32x8::splat(tmin as f32), F32x8::splat(tmax as f32));
+            let (t0, t1) = (F32x8::splat(tmin as f32), F32x8::splat(tmax as f32));
+            let (mask, near) = r.test::<false>(&n, t0, t1);
+            if tmin >= 0.0 {
+                // the one-product widening of forward rays culls exactly the same children
+                let (fmask, fnear) = r.test::<true>(&n, t0, t1);
+                assert_eq!(fmask, mask, "case {case}");
+                assert_eq!(
+                    fnear.to_array().map(f32::to_bits),
+                    near.to_array().map(f32::to_bits)
+                );
+                forward += 1;
+            }
             for (i, b) in boxes.iter().enumerate() {
                 let overlap = enters(o, d, b, tmin, tmax);
                 if overlap >= 1e-12 {
@@ -324,8 +368,8 @@ mod tests {
             }
         }
         assert!(
-            met > 40_000 && grazed > 10_000,
-            "{met} boxes met, {grazed} grazed"
+            met > 40_000 && grazed > 10_000 && forward > 10_000,
+            "{met} boxes met, {grazed} grazed, {forward} forward rays"
         );
     }
 }

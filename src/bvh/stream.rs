@@ -93,7 +93,7 @@ impl Stream<'_> {
         }
         let (ray, p, l) = self.first_ray(mask);
         let tl = |v: F32x8| F32x8::splat(v.as_array()[l]);
-        let (first_hits, _) = ray.test(n, tl(self.rays[p].tmin), tl(tmax[p]));
+        let (first_hits, _) = ray.test::<false>(n, tl(self.rays[p].tmin), tl(tmax[p]));
         let fnear = lanes(fnear);
         let mut count = 0;
         while cand != 0 {
