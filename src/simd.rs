@@ -219,11 +219,25 @@ pub fn max(a: F32x8, b: F32x8) -> F32x8 {
 /// on results).
 #[inline(always)]
 pub fn prefetch<T>(p: &T) {
+    prefetch_address((p as *const T).cast());
+}
+
+/// [`prefetch`] for every cache line of `v` (a slice: all its elements).
+#[inline(always)]
+pub fn prefetch_all<T: ?Sized>(v: &T) {
+    let start = (v as *const T).cast::<i8>();
+    for offset in (0..std::mem::size_of_val(v)).step_by(64) {
+        prefetch_address(start.wrapping_add(offset));
+    }
+}
+
+#[inline(always)]
+fn prefetch_address(p: *const i8) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
         // SAFETY: prefetching never faults, whatever the address.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>((p as *const T).cast()) };
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p) };
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = p;

@@ -11,7 +11,7 @@ use bumpalo::collections::Vec as BVec;
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
 use crate::raytree::SegmentKind;
-use crate::simd::{F32x8, LANES, Vec3x8, load_partial, mask_first};
+use crate::simd::{F32x8, LANES, Vec3x8, load_partial, mask_first, prefetch_all};
 
 /// Marks a ray that is not recorded in a ray tree.
 pub const NO_NODE: u32 = u32::MAX;
@@ -66,6 +66,16 @@ impl<'b> RayColumns<'b> {
             Vec3::new(self.ox[i], self.oy[i], self.oz[i]),
             Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
         )
+    }
+
+    /// Starts fetching rays `first..first + count` (those that exist) into the cache: a hint
+    /// for the group traced after the current one.
+    #[inline]
+    fn prefetch(&self, first: usize, count: usize) {
+        let (start, end) = (first.min(self.len()), (first + count).min(self.len()));
+        for c in [&self.ox, &self.oy, &self.oz, &self.dx, &self.dy, &self.dz] {
+            prefetch_all(&c[start..end]);
+        }
     }
 
     /// Rays `first..first + 8` (fewer at the end, the missing lanes inactive) as a packet
@@ -202,6 +212,12 @@ impl<'b> RayQueue<'b> {
     pub fn packet(&self, first: usize, tmin: f32) -> RayPacket {
         self.rays.packet(first, tmin)
     }
+
+    /// Starts fetching rays `first..first + count` into the cache (a hint).
+    #[inline]
+    pub fn prefetch(&self, first: usize, count: usize) {
+        self.rays.prefetch(first, count);
+    }
 }
 
 /// Shadow rays of one bounce: each carries the colour it adds to its pixel if unblocked.
@@ -272,6 +288,14 @@ impl<'b> ShadowQueue<'b> {
         let end = (first + LANES).min(self.len());
         let max_t = load_partial(&self.max_t[first..end], 0.0);
         (self.rays.packet(first, tmin), max_t)
+    }
+
+    /// Starts fetching shadow rays `first..first + count` into the cache (a hint).
+    #[inline]
+    pub fn prefetch(&self, first: usize, count: usize) {
+        self.rays.prefetch(first, count);
+        let (start, end) = (first.min(self.len()), (first + count).min(self.len()));
+        prefetch_all(&self.max_t[start..end]);
     }
 }
 

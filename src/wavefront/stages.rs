@@ -87,6 +87,9 @@ pub fn intersect_closest<'s>(
     let mut hits = HitColumns::with_capacity_in(rays.len(), scratch);
     let group = LANES * MAX_STREAM;
     for first in (0..rays.len()).step_by(group) {
+        // the next group's rays, fetched while this one is traced (PERF.md, "Prefetching
+        // the queue")
+        rays.prefetch(first + group, group);
         let packets = (rays.len() - first).div_ceil(LANES).min(MAX_STREAM);
         let batch: [RayPacket; MAX_STREAM] =
             std::array::from_fn(|k| rays.packet(first + (k % packets) * LANES, tmin));
@@ -173,6 +176,7 @@ pub fn shade_hits(
 pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut BandOutput<'_>) {
     let group = LANES * MAX_STREAM;
     for first in (0..shadows.len()).step_by(group) {
+        shadows.prefetch(first + group, group);
         let packets = (shadows.len() - first).div_ceil(LANES).min(MAX_STREAM);
         let loaded: [(RayPacket, F32x8); MAX_STREAM] =
             std::array::from_fn(|k| shadows.packet(first + (k % packets) * LANES, EPSILON));
