@@ -176,6 +176,23 @@ pub fn select(mask: Mask, if_true: F32x8, if_false: F32x8) -> F32x8 {
     mask.select(if_true, if_false)
 }
 
+/// The larger of `a` and `b` compared as integers (`vpmaxsd`, one cycle): the float maximum
+/// wherever either is at least `+0` (non-negative floats order as their bits do, and the bits
+/// of every negative float, as integers, are below those of every non-negative one).
+#[inline(always)]
+pub fn max_bits(a: F32x8, b: F32x8) -> F32x8 {
+    let (a, b): (I32x8, I32x8) = (bytemuck::cast(a), bytemuck::cast(b));
+    bytemuck::cast(a.max(b))
+}
+
+/// The smaller of `a` and `b` compared as integers (`vpminsd`): the float minimum where both
+/// are at least `+0`; a negative value (or a NaN with its sign bit set) where either is one.
+#[inline(always)]
+pub fn min_bits(a: F32x8, b: F32x8) -> F32x8 {
+    let (a, b): (I32x8, I32x8) = (bytemuck::cast(a), bytemuck::cast(b));
+    bytemuck::cast(a.min(b))
+}
+
 /// [`select`] for integer lanes.
 #[inline(always)]
 pub fn select_i32(mask: Mask, if_true: I32x8, if_false: I32x8) -> I32x8 {

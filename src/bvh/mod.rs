@@ -254,7 +254,11 @@ impl Plane {
 /// an exit plane, in error by at most the relative rounding the widening covers ([`ROBUST`]).
 /// Returns the lanes that enter within `(tmin, tmax)` (the exit widened by that error,
 /// [`widen_exit`]) and their entry distances. Shared by the single-ray test (lanes = children)
-/// and the packet's octant test (lanes = rays). `FORWARD` promises `tmin >= 0` in every lane.
+/// and the packet's octant test (lanes = rays). `FORWARD` promises `tmin >= 0` in every lane;
+/// then the maximum and minimum compare bits as integers ([`crate::simd::max_bits`], one cycle
+/// on the walk's chain, as in Embree): the entry maximum includes `tmin >= 0`, so it is the
+/// float one, and the exit minimum is the float one where every exit is at least 0 and
+/// negative otherwise, as the float one is, which culls the lane either way.
 #[inline(always)]
 fn slab_octant<const FORWARD: bool>(
     entry: impl Fn(Plane, usize) -> F32x8,
@@ -264,15 +268,30 @@ fn slab_octant<const FORWARD: bool>(
     tmin: F32x8,
     tmax: F32x8,
 ) -> (crate::simd::Mask, F32x8) {
-    use crate::simd::{le, max, min};
-    let t0 = max(
-        max(entry(near[0], 0), entry(near[1], 1)),
-        max(entry(near[2], 2), tmin),
-    );
-    let t1 = min(
-        min(exit(far[0], 0), exit(far[1], 1)),
-        min(exit(far[2], 2), tmax),
-    );
+    use crate::simd::{le, max, max_bits, min, min_bits};
+    let (t0, t1) = if FORWARD {
+        (
+            max_bits(
+                max_bits(entry(near[0], 0), entry(near[1], 1)),
+                max_bits(entry(near[2], 2), tmin),
+            ),
+            min_bits(
+                min_bits(exit(far[0], 0), exit(far[1], 1)),
+                min_bits(exit(far[2], 2), tmax),
+            ),
+        )
+    } else {
+        (
+            max(
+                max(entry(near[0], 0), entry(near[1], 1)),
+                max(entry(near[2], 2), tmin),
+            ),
+            min(
+                min(exit(far[0], 0), exit(far[1], 1)),
+                min(exit(far[2], 2), tmax),
+            ),
+        )
+    };
     (le(t0, widen_exit::<FORWARD>(t1)), t0)
 }
 
