@@ -269,29 +269,20 @@ fn slab_octant<const FORWARD: bool>(
     tmax: F32x8,
 ) -> (crate::simd::Mask, F32x8) {
     use crate::simd::{le, max, max_bits, min, min_bits};
-    let (t0, t1) = if FORWARD {
-        (
-            max_bits(
-                max_bits(entry(near[0], 0), entry(near[1], 1)),
-                max_bits(entry(near[2], 2), tmin),
-            ),
-            min_bits(
-                min_bits(exit(far[0], 0), exit(far[1], 1)),
-                min_bits(exit(far[2], 2), tmax),
-            ),
-        )
+    type Pick = fn(F32x8, F32x8) -> F32x8;
+    let (max, min): (Pick, Pick) = if FORWARD {
+        (max_bits, min_bits)
     } else {
-        (
-            max(
-                max(entry(near[0], 0), entry(near[1], 1)),
-                max(entry(near[2], 2), tmin),
-            ),
-            min(
-                min(exit(far[0], 0), exit(far[1], 1)),
-                min(exit(far[2], 2), tmax),
-            ),
-        )
+        (max, min)
     };
+    let t0 = max(
+        max(entry(near[0], 0), entry(near[1], 1)),
+        max(entry(near[2], 2), tmin),
+    );
+    let t1 = min(
+        min(exit(far[0], 0), exit(far[1], 1)),
+        min(exit(far[2], 2), tmax),
+    );
     (le(t0, widen_exit::<FORWARD>(t1)), t0)
 }
 
