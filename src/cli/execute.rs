@@ -64,13 +64,13 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     }
     let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
-    // The OBJ loader reads big meshes in parallel: on the render's threads.
-    let loader = rayon::ThreadPoolBuilder::new()
+    // The OBJ loader reads big meshes in parallel, and the images are converted and encoded in
+    // parallel: on as many threads as the render (`--threads`), never rayon's global pool.
+    let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(cmd.render.threads)
         .build()
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
-    let mut scene = loader.install(|| Scene::load(&cmd.scene))?;
-    drop(loader);
+    let mut scene = pool.install(|| Scene::load(&cmd.scene))?;
     if cmd.smooth_normals {
         scene.smooth_normals();
     }
@@ -92,7 +92,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         let picture = sample_images::render_filter(w, h, *zoom, &cmd.render.filter);
         files.push((
             file.clone(),
-            output::encode(&picture, output::Format::for_path(file)?)?,
+            pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
         ));
     }
     if traced {
@@ -103,7 +103,6 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         phases.push(("render", t1.elapsed()));
         let t2 = Instant::now();
         // Every image is encoded before any is written: a failed run leaves none.
-        let print = RenderFingerprint::new(&scene, &cmd.render);
         let images = [
             cmd.output.as_ref().map(|p| (ImageKind::Color, p)),
             cmd.depth.as_ref().map(|(near, far, p)| {
@@ -112,14 +111,19 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             }),
             cmd.normals.as_ref().map(|p| (ImageKind::Normals, p)),
         ];
-        for (kind, path) in images.into_iter().flatten() {
-            files.extend(output::frame_files(&frame, kind, path, &print)?);
-        }
+        files.extend(pool.install(|| {
+            let print = RenderFingerprint::new(&scene, &cmd.render);
+            let mut files = Vec::new();
+            for (kind, path) in images.into_iter().flatten() {
+                files.extend(output::frame_files(&frame, kind, path, &print)?);
+            }
+            Ok::<_, Error>(files)
+        })?);
         if let Some((file, zoom)) = &sampling.render_samples {
             let picture = sample_images::render_samples(&frame, &cmd.render.sampler, *zoom);
             files.push((
                 file.clone(),
-                output::encode(&picture, output::Format::for_path(file)?)?,
+                pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
             ));
         }
         output::write_files(&files)?;
@@ -135,12 +139,12 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     }
     if let Some(out) = &cmd.heatmap {
         let t4 = Instant::now();
-        write_heatmap(&cmd, &scene, out)?;
+        pool.install(|| write_heatmap(&cmd, &scene, out))?;
         phases.push(("heatmap", t4.elapsed()));
     }
     if let Some((x, y, json)) = &cmd.ray_tree {
         let t3 = Instant::now();
-        write_ray_tree(&cmd, &scene, *x, *y, json)?;
+        pool.install(|| write_ray_tree(&cmd, &scene, *x, *y, json))?;
         phases.push(("ray_tree", t3.elapsed()));
     }
     if cmd.stats {

@@ -166,13 +166,13 @@ pub enum Samples {
 }
 
 impl Raster {
-    /// An 8-bit RGB raster.
-    pub fn from_rgb8(img: &Rgb8) -> Raster {
+    /// An 8-bit RGB raster: `img`'s bytes, moved, not copied.
+    pub fn from_rgb8(img: Rgb8) -> Raster {
         Raster {
             width: img.width,
             height: img.height,
             channels: 3,
-            samples: Samples::U8(img.data.clone()),
+            samples: Samples::U8(img.data),
         }
     }
 
@@ -211,7 +211,7 @@ fn rgbe_raster(width: u32, height: u32, f: impl Fn(usize) -> [f32; 3]) -> Raster
 pub fn frame_raster(frame: &Frame, kind: ImageKind, format: Format) -> Raster {
     let (w, h) = (frame.width, frame.height);
     match format.samples() {
-        StoredSamples::Rgb8 => Raster::from_rgb8(&match kind {
+        StoredSamples::Rgb8 => Raster::from_rgb8(match kind {
             ImageKind::Color => color_image(frame),
             ImageKind::Depth { near, far } => depth_image(frame, near, far),
             ImageKind::Normals => normal_image(frame),
@@ -248,14 +248,7 @@ pub fn encode_raster(
             let Samples::U8(data) = &raster.samples else {
                 unreachable!("8-bit formats store bytes");
             };
-            rgb8::encode_rgb8(
-                &Rgb8 {
-                    width: raster.width,
-                    height: raster.height,
-                    data: data.clone(),
-                },
-                format,
-            )
+            rgb8::encode_rgb8(raster.width, raster.height, data, format)
         }
         Format::Exr => float::encode_exr(raster, place, fingerprint),
         Format::Pfm => Ok(float::encode_pfm(raster)),
@@ -281,7 +274,7 @@ pub fn decode(bytes: &[u8], format: Format) -> std::result::Result<Decoded, Stri
     };
     match format {
         Format::Png | Format::Tga | Format::Ppm => rgb8::decode_rgb8(bytes, format)
-            .map(|img| plain(Raster::from_rgb8(&img)))
+            .map(|img| plain(Raster::from_rgb8(img)))
             .ok_or_else(|| {
                 format!(
                     "not a readable 8-bit RGB {} image",
@@ -406,7 +399,7 @@ fn temp_path(path: &Path) -> PathBuf {
 pub fn encode(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
     let b = &img.data;
     let raster = match format.samples() {
-        StoredSamples::Rgb8 => Raster::from_rgb8(img),
+        StoredSamples::Rgb8 => Raster::from_rgb8(img.clone()),
         StoredSamples::Float => Raster::from_pixels(img.width, img.height, 3, |i, px| {
             px.copy_from_slice(&[0, 1, 2].map(|c| b[i * 3 + c] as f32 / 255.0));
         }),

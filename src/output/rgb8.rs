@@ -73,27 +73,38 @@ pub fn normal_image(frame: &Frame) -> Rgb8 {
     from_pixels(frame, |i| frame.normal[i].abs())
 }
 
-/// Encodes `img` as PNG, TGA or PPM.
-pub(super) fn encode_rgb8(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
-    let (w, h) = (img.width as usize, img.height as usize);
+/// Encodes the 8-bit RGB image `data` (`w` x `h`, rows top to bottom) as PNG, TGA or PPM.
+pub(super) fn encode_rgb8(w: u32, h: u32, data: &[u8], format: Format) -> Result<Vec<u8>> {
+    let (w, h) = (w as usize, h as usize);
     match format {
         Format::Ppm => {
             let mut out = format!("P6\n{w} {h}\n255\n").into_bytes();
-            out.extend_from_slice(&img.data);
+            out.extend_from_slice(data);
             Ok(out)
         }
         Format::Tga => {
             // Uncompressed true-colour, 24 bits, rows stored bottom to top (origin bottom left).
-            let mut out = vec![0u8; 18];
+            let mut out = vec![0u8; 18 + data.len()];
             out[2] = 2;
             out[12..14].copy_from_slice(&(w as u16).to_le_bytes());
             out[14..16].copy_from_slice(&(h as u16).to_le_bytes());
             out[16] = 24;
-            for row in (0..h).rev() {
-                for px in img.data[row * w * 3..(row + 1) * w * 3].chunks_exact(3) {
-                    out.extend_from_slice(&[px[2], px[1], px[0]]);
-                }
-            }
+            // In parallel, as the colour conversion: at 1280x960 the serial loop was ~4 ms of
+            // every frame's serial tail. Each stored row is its image row's bytes as BGR.
+            let row = (w * 3).max(1);
+            let rows_per_task = (PIXELS_PER_TASK / w.max(1)).max(1);
+            out[18..]
+                .par_chunks_mut(row * rows_per_task)
+                .enumerate()
+                .for_each(|(task, stored)| {
+                    for (j, dst) in stored.chunks_exact_mut(row).enumerate() {
+                        let image_row = h - 1 - (task * rows_per_task + j);
+                        let src = &data[image_row * row..(image_row + 1) * row];
+                        for (d, s) in dst.chunks_exact_mut(3).zip(src.chunks_exact(3)) {
+                            d.copy_from_slice(&[s[2], s[1], s[0]]);
+                        }
+                    }
+                });
             Ok(out)
         }
         Format::Png => {
@@ -101,9 +112,9 @@ pub(super) fn encode_rgb8(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
             let encoder = image::codecs::png::PngEncoder::new(&mut out);
             image::ImageEncoder::write_image(
                 encoder,
-                &img.data,
-                img.width,
-                img.height,
+                data,
+                w as u32,
+                h as u32,
                 image::ExtendedColorType::Rgb8,
             )
             .map_err(|e| Error::Other(format!("cannot encode PNG: {e}")))?;
@@ -171,8 +182,31 @@ mod tests {
             height: 2,
             data: vec![1, 2, 3, 4, 5, 6],
         };
-        let out = encode_rgb8(&img, Format::Tga).unwrap();
+        let out = encode_rgb8(img.width, img.height, &img.data, Format::Tga).unwrap();
         assert_eq!(&out[18..], &[6, 5, 4, 3, 2, 1]);
+    }
+
+    #[test]
+    fn tga_rows_split_over_tasks_are_each_stored_once_bottom_up() {
+        // 100 pixels wide: 163 rows a task, so 400 rows make two full tasks and a partial one.
+        for (w, h) in [
+            (100u32, 400u32),
+            (1, 3),
+            (PIXELS_PER_TASK as u32 + 1, 2),
+            (7, 0),
+        ] {
+            let data: Vec<u8> = (0..w * h * 3).map(|v| (v * 7 % 251) as u8).collect();
+            let out = encode_rgb8(w, h, &data, Format::Tga).unwrap();
+            let (w, h) = (w as usize, h as usize);
+            let mut want = Vec::new();
+            for row in (0..h).rev() {
+                for px in data[row * w * 3..(row + 1) * w * 3].chunks_exact(3) {
+                    want.extend_from_slice(&[px[2], px[1], px[0]]);
+                }
+            }
+            assert_eq!(out.len(), 18 + want.len(), "{w}x{h}");
+            assert!(out[18..] == want[..], "{w}x{h}");
+        }
     }
 
     #[test]
@@ -183,7 +217,7 @@ mod tests {
             data: (0..18).map(|v| v * 13).collect(),
         };
         for format in [Format::Png, Format::Tga, Format::Ppm] {
-            let bytes = encode_rgb8(&img, format).unwrap();
+            let bytes = encode_rgb8(img.width, img.height, &img.data, format).unwrap();
             assert_eq!(decode_rgb8(&bytes, format), Some(img.clone()), "{format:?}");
         }
     }
