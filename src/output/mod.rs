@@ -399,7 +399,8 @@ fn temp_path(path: &Path) -> PathBuf {
 pub fn encode(img: &Rgb8, format: Format) -> Result<Vec<u8>> {
     let b = &img.data;
     let raster = match format.samples() {
-        StoredSamples::Rgb8 => Raster::from_rgb8(img.clone()),
+        // the bytes as they are, not copied into a raster first
+        StoredSamples::Rgb8 => return rgb8::encode_rgb8(img.width, img.height, b, format),
         StoredSamples::Float => Raster::from_pixels(img.width, img.height, 3, |i, px| {
             px.copy_from_slice(&[0, 1, 2].map(|c| b[i * 3 + c] as f32 / 255.0));
         }),

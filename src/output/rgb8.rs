@@ -89,8 +89,8 @@ pub(super) fn encode_rgb8(w: u32, h: u32, data: &[u8], format: Format) -> Result
             out[12..14].copy_from_slice(&(w as u16).to_le_bytes());
             out[14..16].copy_from_slice(&(h as u16).to_le_bytes());
             out[16] = 24;
-            // In parallel, as the colour conversion: at 1280x960 the serial loop was ~4 ms of
-            // every frame's serial tail. Each stored row is its image row's bytes as BGR.
+            // In parallel, as the colour conversion (a serial loop here was part of every
+            // frame's serial tail). Each stored row is its image row's bytes as BGR.
             let row = (w * 3).max(1);
             let rows_per_task = (PIXELS_PER_TASK / w.max(1)).max(1);
             out[18..]
