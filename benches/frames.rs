@@ -135,6 +135,8 @@ fn bench_frames(c: &mut Criterion, group_name: &str, frames: &[Frame]) {
 }
 
 fn frames(c: &mut Criterion) {
+    // the binary's allocator policy (`whitted::hugepages`)
+    whitted::hugepages::keep_freed_memory();
     bench_frames(c, "frames/ours", &our_scenes());
     if let Some(course) = course_dir() {
         bench_frames(c, "frames/course", &course_scenes(&course));

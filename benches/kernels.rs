@@ -68,6 +68,8 @@ fn bench_any(c: &mut Criterion, scene: BenchScene, kind: &str, g: &Geometry, q: 
 }
 
 fn kernels(c: &mut Criterion) {
+    // the binary's allocator policy (`whitted::hugepages`)
+    whitted::hugepages::keep_freed_memory();
     let primary = generate_camera_rays(WIDTH, HEIGHT).expect("valid bench size");
     for scene in [BenchScene::Spheres64, BenchScene::Torus100k] {
         let mut g = scene.geometry();

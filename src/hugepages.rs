@@ -9,6 +9,11 @@
 //! benchmarks install it as their global allocator (`#[global_allocator]`); an embedding
 //! program may do the same. Where the kernel has no huge pages, or on other systems, the advice
 //! is ignored and nothing else changes: the same bytes are allocated and rendered either way.
+//!
+//! [`keep_freed_memory`] is the other half of the binary's allocator policy: glibc's malloc,
+//! left to itself, hands blocks from 128 KiB up to the kernel on every free and takes fresh
+//! pages for the next, so a BVH built again (the benchmark's repetitions, an animation) pays a
+//! page fault (1.7 us each on this project's VMs) for each 4 KiB it touches again.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
@@ -46,6 +51,30 @@ unsafe impl GlobalAlloc for HugePages {
         let p = unsafe { System.realloc(ptr, layout, new_size) };
         advise(p, new_size);
         p
+    }
+}
+
+/// Blocks below this size come from malloc's heaps rather than a fresh `mmap` each
+/// (glibc's largest; bigger blocks are mapped and unmapped as before).
+pub const MMAP_THRESHOLD_BYTES: usize = 32 << 20;
+
+/// Free memory at the top of a heap is returned to the kernel only beyond this much.
+pub const TRIM_THRESHOLD_BYTES: usize = 256 << 20;
+
+/// Makes glibc's malloc keep freed blocks below [`MMAP_THRESHOLD_BYTES`] for reuse (and return
+/// a heap's free top only beyond [`TRIM_THRESHOLD_BYTES`]) instead of unmapping them at each
+/// free; the binary and the benchmarks call it first thing. glibc's default raises its
+/// thresholds only as it sees blocks freed, so the first builds of a process took 30–70 page
+/// faults each (spheres4096, 4098 primitives; measured: PERF.md, "The spheres4096 build").
+/// Freed memory is reused before a heap grows, so peak memory barely moves (PERF.md). Elsewhere
+/// (other C libraries, other systems) it does nothing.
+pub fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets two of malloc's tuning parameters, under malloc's own locks; a
+    // refused setting (it returns 0) leaves glibc's default.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES as libc::c_int);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES as libc::c_int);
     }
 }
 

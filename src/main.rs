@@ -9,6 +9,7 @@ use std::process::ExitCode;
 static ALLOCATOR: whitted::hugepages::HugePages = whitted::hugepages::HugePages;
 
 fn main() -> ExitCode {
+    whitted::hugepages::keep_freed_memory();
     if !whitted::cpu_supported() {
         eprintln!(
             "error: this build of whitted needs a CPU with AVX2 and FMA (x86-64-v3); \
