@@ -181,7 +181,7 @@ fn partly_filled_blocks_hit_only_their_primitives() {
                 expected,
                 "{n}: {ray:?}"
             );
-            for path in [Path::Stream, Path::Packet, Path::Single] {
+            for path in Path::ALL {
                 let rays = [RayPacket::from_rays(&[ray], 0.0)];
                 let mut hit = [HitPacket::new(f32::INFINITY)];
                 b.closest_hit_path(path, &rays, &mut hit);
@@ -266,7 +266,7 @@ fn single_rays_packets_and_streams_agree_bit_for_bit() {
                         .fold(0, |m, l| m | 1 << l)
                 })
                 .collect();
-            for path in [Path::Stream, Path::Packet, Path::Single] {
+            for path in Path::ALL {
                 let mut hits = vec![HitPacket::new(f32::INFINITY); group.len()];
                 g.closest_hit_path(path, &group, &mut hits);
                 for (k, (h, p)) in hits.iter().zip(&group).enumerate() {
@@ -333,7 +333,7 @@ fn ties_go_to_the_smaller_index_on_every_path() {
             std::array::from_fn(|_| Ray::new(o, (target + v(&mut rng, -0.3, 0.3) - o).normalize()));
         let first = if target == Vec3::ZERO { 0 } else { 50 };
         let group = vec![RayPacket::from_rays(&rays, 0.0); 2];
-        for path in [Path::Stream, Path::Packet, Path::Single] {
+        for path in Path::ALL {
             let mut hits = vec![HitPacket::new(f32::INFINITY); 2];
             b.closest_hit_path(path, &group, &mut hits);
             for (l, ray) in rays.iter().enumerate() {

@@ -91,13 +91,21 @@ fn directed_product(o: Vec3A, inv: Vec3A) -> (Vec3A, Vec3A) {
 impl Bvh8 {
     /// The closest hit of one ray: visits every leaf the ray may hit nearer than `tmax`,
     /// nearest child first; `leaf(leaf, tmax)` tests the leaf's primitives and lowers `tmax`
-    /// where it finds a nearer hit.
+    /// where it finds a nearer hit; `touch(leaf)` starts fetching a leaf the walk pushes for
+    /// later, as in [`Bvh8::closest_many`].
     #[inline(always)]
-    pub fn closest(&self, ray: &Ray, tmin: f32, tmax: &mut f32, leaf: impl FnMut(Leaf, &mut f32)) {
+    pub fn closest(
+        &self,
+        ray: &Ray,
+        tmin: f32,
+        tmax: &mut f32,
+        leaf: impl FnMut(Leaf, &mut f32),
+        touch: impl Fn(Leaf),
+    ) {
         if tmin >= 0.0 {
-            self.closest_walk::<true>(ray, tmin, tmax, leaf);
+            self.closest_walk::<true>(ray, tmin, tmax, leaf, &touch);
         } else {
-            self.closest_walk::<false>(ray, tmin, tmax, leaf);
+            self.closest_walk::<false>(ray, tmin, tmax, leaf, &touch);
         }
     }
 
@@ -109,6 +117,7 @@ impl Bvh8 {
         tmin: f32,
         tmax: &mut f32,
         mut leaf: impl FnMut(Leaf, &mut f32),
+        touch: &impl Fn(Leaf),
     ) {
         if self.root.is_empty() {
             return;
@@ -123,7 +132,7 @@ impl Bvh8 {
                 None
             } else {
                 let node = &self.nodes[cur.index()];
-                self.descend::<FORWARD>(&r, node, tmin8, *tmax, &mut stack, &|_| {})
+                self.descend::<FORWARD>(&r, node, tmin8, *tmax, &mut stack, touch)
             };
             cur = match next {
                 Some(c) => c,

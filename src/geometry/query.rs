@@ -32,8 +32,16 @@ pub enum Path {
     Stream,
     /// Packet by packet ([`Geometry::closest_hit_packet`]).
     Packet,
-    /// Ray by ray ([`Geometry::closest_hit`]).
+    /// Ray by ray, one walk at a time ([`Geometry::closest_hit`]).
     Single,
+    /// Ray by ray, several walks interleaved ([`crate::bvh::Bvh8::closest_many`]) for closest
+    /// hits; any-hit queries take the [`Path::Single`] walk (there is no interleaved one).
+    Interleaved,
+}
+
+impl Path {
+    /// Every path, for tests that hold them to one another.
+    pub const ALL: [Path; 4] = [Path::Stream, Path::Packet, Path::Single, Path::Interleaved];
 }
 
 /// The smallest cosine between a group's ray directions and their mean at which the group
@@ -47,6 +55,14 @@ pub const COHERENT_COS: f32 = 0.9;
 /// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them ray
 /// by ray (torus1m diffuse: single rays 1.3x faster). Measured: PERF.md, "Which path".
 pub const SMALL_TREE_NODES: usize = 1024;
+
+/// Trees with at least this many interior nodes (4 MiB of them) trace incoherent rays with
+/// several walks interleaved, smaller ones one walk at a time. Interleaving overlaps the walks'
+/// memory latency, which pays where the tree's nodes and leaves come from DRAM (torus1m, 70,264
+/// nodes: diffuse +11 to +15%), while its bookkeeping costs about what it hides where they
+/// come from the caches (torus100k, 6,978 nodes: one walk at a time -1 to +4% on diffuse rays,
+/// +2 to +9% on incoherent mirror rays). Measured: PERF.md, sitting 13, "One walk or two".
+pub const INTERLEAVE_NODES: usize = 16384;
 
 /// The smallest cosine between the active directions of `rays` and their mean (1 when no
 /// lane is active).
@@ -81,11 +97,7 @@ impl Geometry {
         if self.bvh.is_empty() {
             self.closest_brute(ray, tmin, &mut best);
         } else {
-            let mut limit = tmax;
-            self.bvh.closest(ray, tmin, &mut limit, |leaf, limit| {
-                self.closest_leaf(leaf, ray, tmin, &mut best);
-                *limit = best.t;
-            });
+            self.closest_bvh(ray, tmin, &mut best);
         }
         let base = self.base(PrimKind::Plane) as i32;
         for i in self.planes_range() {
@@ -95,6 +107,23 @@ impl Geometry {
             }
         }
         (best.prim >= 0).then_some((best.t, best.prim as u32))
+    }
+
+    /// Lowers `best` to the closest hit of one ray among the BVH's primitives nearer than
+    /// `best.t` (one walk; the leaves it pushes are prefetched, as the interleaved walks do).
+    #[inline(always)]
+    fn closest_bvh(&self, ray: &Ray, tmin: f32, best: &mut Best) {
+        let mut limit = best.t;
+        self.bvh.closest(
+            ray,
+            tmin,
+            &mut limit,
+            |leaf, limit| {
+                self.closest_leaf(leaf, ray, tmin, best);
+                *limit = best.t;
+            },
+            |leaf| self.prefetch_leaf(leaf),
+        );
     }
 
     /// Updates `hit` with the closest hits of the packet's active lanes; inactive lanes of `hit`
@@ -168,15 +197,19 @@ impl Geometry {
     }
 
     /// The path for a group of packets: a stream when their directions are coherent
-    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and single
-    /// rays in a big one.
+    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]), single
+    /// rays in a bigger one, and single rays with their walks interleaved in a big one
+    /// ([`INTERLEAVE_NODES`]).
     pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
+        let nodes = self.bvh.nodes.len();
         if coherence(rays) >= COHERENT_COS {
             Path::Stream
-        } else if self.bvh.nodes.len() < SMALL_TREE_NODES {
+        } else if nodes < SMALL_TREE_NODES {
             Path::Packet
-        } else {
+        } else if nodes < INTERLEAVE_NODES {
             Path::Single
+        } else {
+            Path::Interleaved
         }
     }
 
@@ -197,13 +230,19 @@ impl Geometry {
                     self.closest_hit_packet(r, h);
                 }
             }
-            Path::Single => self.closest_hit_singles(rays, hits),
+            Path::Single => self.closest_hit_singles::<false>(rays, hits),
+            Path::Interleaved => self.closest_hit_singles::<true>(rays, hits),
         }
     }
 
-    /// Closest hits of up to [`MAX_STREAM`] packets ray by ray, several walks interleaved
-    /// ([`crate::bvh::Bvh8::closest_many`]); the same answers as [`Geometry::closest_hit`].
-    fn closest_hit_singles(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+    /// Closest hits of up to [`MAX_STREAM`] packets ray by ray, with several walks interleaved
+    /// if `INTERLEAVE` ([`crate::bvh::Bvh8::closest_many`]); the same answers as
+    /// [`Geometry::closest_hit`] either way.
+    fn closest_hit_singles<const INTERLEAVE: bool>(
+        &self,
+        rays: &[RayPacket],
+        hits: &mut [HitPacket],
+    ) {
         const N: usize = MAX_STREAM * LANES;
         // the active lanes, (packet, lane), and their closest hits so far
         let mut slot = [(0usize, 0usize); N];
@@ -231,6 +270,11 @@ impl Geometry {
             for (i, b) in best[..n].iter_mut().enumerate() {
                 let (r, tmin) = ray(i);
                 self.closest_brute(&r, tmin, b);
+            }
+        } else if !INTERLEAVE {
+            for (i, b) in best[..n].iter_mut().enumerate() {
+                let (r, tmin) = ray(i);
+                self.closest_bvh(&r, tmin, b);
             }
         } else {
             let start: [f32; N] = std::array::from_fn(|i| best[i].t);
@@ -345,7 +389,7 @@ impl Geometry {
                     *o = self.occluded_packet(r, *t);
                 }
             }
-            Path::Single => {
+            Path::Single | Path::Interleaved => {
                 for ((r, t), o) in rays.iter().zip(tmax).zip(out) {
                     let (tmin, tmax, active) = (lanes(r.tmin), lanes(*t), bitmask(r.active));
                     let mut bits = 0;
