@@ -57,7 +57,7 @@ impl Bvh8 {
         let start = |i: usize| {
             let (r, tmin, tmax) = ray(i);
             Walk {
-                ray: Ray1::new(&r),
+                ray: Ray1::new::<FORWARD>(&r),
                 tmin: F32x8::splat(tmin),
                 tmax,
                 cur: self.root,
@@ -68,7 +68,7 @@ impl Bvh8 {
         // a walk's next ray reuses its storage: a new `Walk` moved in would copy the stack
         let restart = |w: &mut Walk, i: usize| {
             let (r, tmin, tmax) = ray(i);
-            w.ray = Ray1::new(&r);
+            w.ray = Ray1::new::<FORWARD>(&r);
             w.tmin = F32x8::splat(tmin);
             w.tmax = tmax;
             w.cur = self.root;

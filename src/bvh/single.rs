@@ -4,7 +4,7 @@
 
 use super::stack::Stack;
 use super::{
-    Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, WIDTH, safe_inverse, slab_octant, widen,
+    Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, ROBUST, WIDTH, safe_inverse, slab_octant, widen,
 };
 use crate::math::Ray;
 use crate::simd::{F32x8, bitmask, fused_mul_sub};
@@ -23,8 +23,15 @@ pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 /// so the one rounding left is relative to the distance itself, like that of the inverse:
 /// the widening of the exit distance covers both ([`super::ROBUST`]). Embree's kernels use this
 /// form without the directed offsets (and without widening).
+///
+/// A `FORWARD` ray (`tmin >= 0`) folds that widening into its exit planes: their reciprocal is
+/// `inv * ROBUST` (one rounding more, inside the budget of [`super::ROBUST`]) and their offset
+/// is that reciprocal times the origin, rounded down, so an exit distance of at least 0 comes
+/// out widened, and the walk's chain of dependent operations loses the multiplication that
+/// widened it after the minimum.
 pub(super) struct Ray1 {
     inv: [F32x8; 3],
+    inv_exit: [F32x8; 3],
     oi_near: [F32x8; 3],
     oi_far: [F32x8; 3],
     near: [Plane; 3],
@@ -32,20 +39,27 @@ pub(super) struct Ray1 {
 }
 
 impl Ray1 {
+    /// The ray prepared for [`Ray1::test`] with the same `FORWARD`.
     #[inline(always)]
-    pub(super) fn new(ray: &Ray) -> Ray1 {
-        Ray1::from_parts(ray.origin.to_array(), ray.dir.to_array().map(safe_inverse))
+    pub(super) fn new<const FORWARD: bool>(ray: &Ray) -> Ray1 {
+        Ray1::from_parts::<FORWARD>(ray.origin.to_array(), ray.dir.to_array().map(safe_inverse))
     }
 
     /// From an origin and the safe reciprocal direction ([`safe_inverse`]).
     #[inline(always)]
-    pub(super) fn from_parts(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
-        let (up, down) = directed_product(Vec3A::from_array(o), Vec3A::from_array(inv));
-        let octant = Vec3A::from_array(inv).cmplt(Vec3A::ZERO).bitmask() as usize;
+    pub(super) fn from_parts<const FORWARD: bool>(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
+        let o = Vec3A::from_array(o);
+        let inv = Vec3A::from_array(inv);
+        let inv_exit = if FORWARD { inv * ROBUST } else { inv };
+        let (up, _) = directed_product(o, inv);
+        let (_, down) = directed_product(o, inv_exit);
+        let octant = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
+        let splat = |v: Vec3A| v.to_array().map(F32x8::splat);
         Ray1 {
-            inv: inv.map(F32x8::splat),
-            oi_near: up.to_array().map(F32x8::splat),
-            oi_far: down.to_array().map(F32x8::splat),
+            inv: splat(inv),
+            inv_exit: splat(inv_exit),
+            oi_near: splat(up),
+            oi_far: splat(down),
             near: Plane::ENTRY_OF_OCTANT[octant],
             far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
@@ -53,7 +67,8 @@ impl Ray1 {
 
     /// The children the ray enters within `(tmin, tmax)` (bit `i` = child `i`) and their entry
     /// distances (above the exact ones by at most the relative rounding the widening covers).
-    /// `FORWARD` promises `tmin >= 0` ([`super::widen_exit`]); either way the same children.
+    /// `FORWARD` promises `tmin >= 0` and a ray made by `new::<FORWARD>`; the entry distances
+    /// are the same bits either way.
     #[inline(always)]
     pub(super) fn test<const FORWARD: bool>(
         &self,
@@ -65,10 +80,30 @@ impl Ray1 {
             fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_near[axis])
         };
         let exit = |plane: Plane, axis: usize| {
-            fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_far[axis])
+            fused_mul_sub(
+                n.bounds[plane as usize],
+                self.inv_exit[axis],
+                self.oi_far[axis],
+            )
         };
-        let (enter, near) = slab_octant::<FORWARD>(entry, exit, &self.near, &self.far, tmin, tmax);
-        (bitmask(enter), near)
+        if FORWARD {
+            // the exits come widened; `tmax` (known before the node) is widened here
+            use crate::simd::{le, max_bits, min_bits};
+            let (near, far) = (&self.near, &self.far);
+            let t0 = max_bits(
+                max_bits(entry(near[0], 0), entry(near[1], 1)),
+                max_bits(entry(near[2], 2), tmin),
+            );
+            let t1 = min_bits(
+                min_bits(exit(far[0], 0), exit(far[1], 1)),
+                min_bits(exit(far[2], 2), tmax * F32x8::splat(ROBUST)),
+            );
+            (bitmask(le(t0, t1)), t0)
+        } else {
+            let (enter, near) =
+                slab_octant::<false>(entry, exit, &self.near, &self.far, tmin, tmax);
+            (bitmask(enter), near)
+        }
     }
 }
 
@@ -122,7 +157,7 @@ impl Bvh8 {
         if self.root.is_empty() {
             return;
         }
-        let r = Ray1::new(ray);
+        let r = Ray1::new::<FORWARD>(ray);
         let tmin8 = F32x8::splat(tmin);
         let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
         let mut cur = self.root;
@@ -225,7 +260,7 @@ impl Bvh8 {
         if self.root.is_empty() {
             return false;
         }
-        let r = Ray1::new(ray);
+        let r = Ray1::new::<FORWARD>(ray);
         let (tmin8, tmax8) = (F32x8::splat(tmin), F32x8::splat(tmax));
         let mut stack: Stack<NodeRef, STACK> = Stack::new();
         let mut cur = self.root;
@@ -316,7 +351,8 @@ mod tests {
     /// far from the boxes (up to 1e6, where `origin * inv` carries a large absolute error),
     /// direction components of zero, boxes only grazed, negative `tmin` (orthographic rays).
     /// Boxes are stored unpadded, so only the test's own error bound is exercised. For
-    /// `tmin >= 0` the forward test (one-product widening) answers exactly as the general one.
+    /// `tmin >= 0` the forward test (widening folded into the exit planes) gives the same
+    /// entry distances and must keep every met box too.
     #[test]
     fn the_node_test_never_culls_a_box_the_ray_meets() {
         let mut rng = Rng(0x2545_f491);
@@ -351,28 +387,34 @@ mod tests {
                 n.bounds[a] = F32x8::new(boxes.map(|b| b.min[a]));
                 n.bounds[3 + a] = F32x8::new(boxes.map(|b| b.max[a]));
             }
-            let r = Ray1::new(&Ray::new(o, d));
+            let ray = Ray::new(o, d);
             let (t0, t1) = (F32x8::splat(tmin as f32), F32x8::splat(tmax as f32));
-            let (mask, near) = r.test::<false>(&n, t0, t1);
-            if tmin >= 0.0 {
-                // the one-product widening of forward rays culls exactly the same children
-                let (fmask, fnear) = r.test::<true>(&n, t0, t1);
-                assert_eq!(fmask, mask, "case {case}");
+            let (mask, near) = Ray1::new::<false>(&ray).test::<false>(&n, t0, t1);
+            // forward rays (the widening folded into the exit planes): the same entry
+            // distances, and they too must keep every box they meet
+            let fmask = if tmin >= 0.0 {
+                let (fmask, fnear) = Ray1::new::<true>(&ray).test::<true>(&n, t0, t1);
                 assert_eq!(
                     fnear.to_array().map(f32::to_bits),
                     near.to_array().map(f32::to_bits)
                 );
                 forward += 1;
-            }
+                fmask
+            } else {
+                mask
+            };
             for (i, b) in boxes.iter().enumerate() {
                 let overlap = enters(o, d, b, tmin, tmax);
                 if overlap >= 1e-12 {
                     met += 1;
                     grazed += usize::from(overlap < 1e-4);
-                    assert!(
-                        mask >> i & 1 == 1,
-                        "case {case}: box {b:?} culled, ray {o} + t {d}, overlap {overlap:e}"
-                    );
+                    for (m, kind) in [(mask, "general"), (fmask, "forward")] {
+                        assert!(
+                            m >> i & 1 == 1,
+                            "case {case}: box {b:?} culled ({kind}), ray {o} + t {d}, \
+                             overlap {overlap:e}"
+                        );
+                    }
                 }
             }
         }

@@ -62,7 +62,7 @@ impl Stream<'_> {
         let lane = |v: F32x8| v.as_array()[l];
         let o = [lane(pk.org.x), lane(pk.org.y), lane(pk.org.z)];
         let inv = [lane(pk.inv.x), lane(pk.inv.y), lane(pk.inv.z)];
-        (Ray1::from_parts(o, inv), p, l)
+        (Ray1::from_parts::<false>(o, inv), p, l)
     }
 
     /// The largest `tmax` of any active ray.
