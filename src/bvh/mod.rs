@@ -63,7 +63,10 @@ pub const MAX_DEPTH: usize = 40;
 /// ray touches: a distance carries at most three relative roundings (reciprocal, difference,
 /// product; the fused single-ray form two), which the entry may err up and the exit down, and
 /// the widening itself rounds twice, so `1 + 2 gamma(4)` (Pharr et al.'s `gamma(n)` =
-/// `n u / (1 - n u)`; `1 + 2 gamma(3)` alone left the widening's own rounding uncovered).
+/// `n u / (1 - n u)`; `1 + 2 gamma(3)` alone left the widening's own rounding uncovered). The
+/// forward single-ray test, which folds the widening into its exit reciprocal, spends five of
+/// those eight roundings: two on the entry, three on the exit (reciprocal, the folded
+/// reciprocal, the fused difference).
 const ROBUST: f32 = 1.0 + 2.0 * (4.0 * f32::EPSILON * 0.5) / (1.0 - 4.0 * f32::EPSILON * 0.5);
 
 /// An axis-aligned box.
