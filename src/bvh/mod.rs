@@ -14,6 +14,7 @@
 //!                                     '--LeafSink::leaf(tag, primitives)--> caller's leaf blocks
 //! traversals (leaf test as a closure):
 //!     single.rs  one ray, all 8 children per pass, nearest first     (incoherent rays)
+//!     interleave.rs  single-ray walks of many rays in turn         (incoherent rays, big trees)
 //!     packet.rs  8 rays, child by child, per-lane entry distances     (small coherent groups;
 //!                [`Bvh8::closest_packet_probed`] reports each node to a [`TraversalProbe`],
 //!                the cost heatmap's counter)
