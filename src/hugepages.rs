@@ -65,7 +65,7 @@ pub const TRIM_THRESHOLD_BYTES: usize = 256 << 20;
 /// a heap's free top only beyond [`TRIM_THRESHOLD_BYTES`]) instead of unmapping them at each
 /// free; the binary and the benchmarks call it first thing. glibc's default raises its
 /// thresholds only as it sees blocks freed, so the first builds of a process took 30–70 page
-/// faults each (spheres4096, 4098 primitives; measured: PERF.md, sittings 12–14, "Freed memory").
+/// faults each (spheres4096, 4098 primitives; measured: PERF.md, sittings 12–15, "Freed memory").
 /// Freed memory is reused before a heap grows, so peak memory barely moves (PERF.md). Elsewhere
 /// (other C libraries, other systems) it does nothing.
 pub fn keep_freed_memory() {

@@ -262,9 +262,11 @@ impl Plane {
 /// then the maximum and minimum compare bits as integers ([`crate::simd::max_bits`], one cycle
 /// on the walk's chain, as in Embree): the entry maximum includes `tmin >= 0`, so it is the
 /// float one, and the exit minimum is the float one where every exit is at least 0 and
-/// negative otherwise, as the float one is, which culls the lane either way.
+/// negative otherwise, as the float one is, which culls the lane either way. `WIDENED` says
+/// the exit distances and `tmax` come already widened (the forward single-ray test folds the
+/// widening into its exit planes), so none is applied here.
 #[inline(always)]
-fn slab_octant<const FORWARD: bool>(
+fn slab_octant<const FORWARD: bool, const WIDENED: bool>(
     entry: impl Fn(Plane, usize) -> F32x8,
     exit: impl Fn(Plane, usize) -> F32x8,
     near: &[Plane; 3],
@@ -287,7 +289,12 @@ fn slab_octant<const FORWARD: bool>(
         min(exit(far[0], 0), exit(far[1], 1)),
         min(exit(far[2], 2), tmax),
     );
-    (le(t0, widen_exit::<FORWARD>(t1)), t0)
+    let t1 = if WIDENED {
+        t1
+    } else {
+        widen_exit::<FORWARD>(t1)
+    };
+    (le(t0, t1), t0)
 }
 
 /// An interior node: its children's boxes structure of arrays and their references. Children

@@ -79,7 +79,7 @@ impl Packet8 {
         );
         let t =
             |k: Plane, a: usize| (F32x8::splat(n.bounds[k as usize].as_array()[i]) - o[a]) * inv[a];
-        slab_octant::<false>(t, t, &f.near, &f.far, tmin, tmax)
+        slab_octant::<false, false>(t, t, &f.near, &f.far, tmin, tmax)
     }
 
     /// [`Packet8::test`] for a box given as an [`Aabb`].

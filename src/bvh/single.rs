@@ -50,9 +50,13 @@ impl Ray1 {
     pub(super) fn from_parts<const FORWARD: bool>(o: [f32; 3], inv: [f32; 3]) -> Ray1 {
         let o = Vec3A::from_array(o);
         let inv = Vec3A::from_array(inv);
-        let inv_exit = if FORWARD { inv * ROBUST } else { inv };
-        let (up, _) = directed_product(o, inv);
-        let (_, down) = directed_product(o, inv_exit);
+        let (up, down) = directed_product(o, inv);
+        let (inv_exit, down) = if FORWARD {
+            let inv_exit = inv * ROBUST;
+            (inv_exit, directed_product(o, inv_exit).1)
+        } else {
+            (inv, down)
+        };
         let octant = inv.cmplt(Vec3A::ZERO).bitmask() as usize;
         let splat = |v: Vec3A| v.to_array().map(F32x8::splat);
         Ray1 {
@@ -86,24 +90,15 @@ impl Ray1 {
                 self.oi_far[axis],
             )
         };
-        if FORWARD {
-            // the exits come widened; `tmax` (known before the node) is widened here
-            use crate::simd::{le, max_bits, min_bits};
-            let (near, far) = (&self.near, &self.far);
-            let t0 = max_bits(
-                max_bits(entry(near[0], 0), entry(near[1], 1)),
-                max_bits(entry(near[2], 2), tmin),
-            );
-            let t1 = min_bits(
-                min_bits(exit(far[0], 0), exit(far[1], 1)),
-                min_bits(exit(far[2], 2), tmax * F32x8::splat(ROBUST)),
-            );
-            (bitmask(le(t0, t1)), t0)
+        // a forward ray's exits come widened; its `tmax` (known before the node) is widened here
+        let tmax = if FORWARD {
+            tmax * F32x8::splat(ROBUST)
         } else {
-            let (enter, near) =
-                slab_octant::<false>(entry, exit, &self.near, &self.far, tmin, tmax);
-            (bitmask(enter), near)
-        }
+            tmax
+        };
+        let (enter, near) =
+            slab_octant::<FORWARD, FORWARD>(entry, exit, &self.near, &self.far, tmin, tmax);
+        (bitmask(enter), near)
     }
 }
 

@@ -61,7 +61,7 @@ pub const SMALL_TREE_NODES: usize = 1024;
 /// memory latency, which pays where the tree's nodes and leaves come from DRAM (torus1m, 70,264
 /// nodes: diffuse +3 to +15%), while its bookkeeping costs about what it hides where they
 /// come from the caches (torus100k, 6,978 nodes: one walk at a time -1 to +4% on diffuse rays,
-/// +2 to +9% on incoherent mirror rays). Measured: PERF.md, sittings 12–14, "One walk or two".
+/// +2 to +9% on incoherent mirror rays). Measured: PERF.md, sittings 12–15, "One walk or two".
 pub const INTERLEAVE_NODES: usize = 16384;
 
 /// The smallest cosine between the active directions of `rays` and their mean (1 when no
