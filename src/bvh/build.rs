@@ -339,11 +339,18 @@ impl Bins {
         }
     }
 
-    /// Adds every reference on all three axes, two at a time (independent updates overlap).
+    /// Adds every reference on each axis the centroids span, two at a time (independent
+    /// updates overlap). An axis where every centroid coincides (scale 0: the sweep skips it)
+    /// is not binned: all its references would land in one bin, one dependent update after
+    /// another.
     #[inline(always)]
     fn add_all(&mut self, refs: &[PrimRef], m: &Mapping) {
+        let live = m.scale.truncate().cmpne(glam::Vec3::ZERO).bitmask();
         let mut add = |r: &PrimRef, b: [usize; 3]| {
             for (axis, b) in b.into_iter().enumerate() {
+                if live >> axis & 1 == 0 {
+                    continue;
+                }
                 // (the mask only tells the compiler the index is in range)
                 let b = b & (MAX_BINS - 1);
                 self.counts[axis][b] += 1;
