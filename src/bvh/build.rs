@@ -932,4 +932,89 @@ mod tests {
         assert_eq!(m.scale.w, 0.0);
         assert_eq!((r.id(), r.tag()), (12345, 3));
     }
+
+    /// `validate` fails, with the matching message, on each kind of broken tree it promises to
+    /// catch: a tree built over random boxes passes, and one change at a time breaks it.
+    #[test]
+    fn validate_rejects_each_broken_invariant() {
+        use super::super::{HI, LO};
+        use crate::simd::F32x8;
+        let mut rng = super::super::test_rng::Rng(0x51ed_270b);
+        let boxes: Vec<Aabb> = (0..300)
+            .map(|_| {
+                let c: [f32; 3] = std::array::from_fn(|_| rng.range64(-10.0, 10.0) as f32);
+                let c = glam::Vec3::from_array(c);
+                Aabb {
+                    min: c - glam::Vec3::splat(0.1),
+                    max: c + glam::Vec3::splat(0.2),
+                }
+            })
+            .collect();
+        let tags = vec![0u8; boxes.len()];
+        let sink = RecordingSink::default();
+        let bvh = build(
+            boxes.len(),
+            |i| (boxes[i], 0),
+            &BuildSettings::default(),
+            &sink,
+        );
+        let lists = sink.leaves();
+        let leaf_prims = |l: Leaf| lists[l.first as usize].clone();
+        let check = |b: &Bvh8| b.validate(&boxes, &tags, leaf_prims);
+        check(&bvh).unwrap();
+        // a node of 3 to 7 children, and one whose first child is a leaf
+        let partial = bvh
+            .nodes
+            .iter()
+            .position(|n| (3..WIDTH).contains(&n.len()))
+            .unwrap();
+        let with_leaf = bvh.nodes.iter().position(|n| n.child[0].is_leaf()).unwrap();
+        let expect = |b: Bvh8, what: &str| {
+            let e = check(&b).expect_err(what);
+            assert!(e.contains(what), "expected '{what}', got '{e}'");
+        };
+        // an empty slot before a child (the last child moved one slot on)
+        let mut b = bvh.clone();
+        let n = &mut b.nodes[partial];
+        let last = n.len();
+        n.child.swap(last - 1, last);
+        for k in 0..6 {
+            let mut p = n.bounds[k].to_array();
+            p.swap(last - 1, last);
+            n.bounds[k] = F32x8::new(p);
+        }
+        expect(b, "after the last child");
+        // a child box that does not hold its primitives
+        let mut b = bvh.clone();
+        let n = &mut b.nodes[with_leaf];
+        for k in HI..HI + 3 {
+            let mut p = n.bounds[k].to_array();
+            p[0] = n.bounds[k - HI + LO].to_array()[0];
+            n.bounds[k] = F32x8::new(p);
+        }
+        expect(b, "does not hold primitive");
+        // a node reached twice (and so another never)
+        let mut b = bvh.clone();
+        let inner =
+            |n: &Node8| -> Vec<usize> { (0..n.len()).filter(|&k| !n.child[k].is_leaf()).collect() };
+        let i = (0..b.nodes.len())
+            .find(|&i| inner(&b.nodes[i]).len() >= 2)
+            .unwrap();
+        let k = inner(&b.nodes[i]);
+        let n = &mut b.nodes[i];
+        n.child[k[1]] = n.child[k[0]];
+        for plane in &mut n.bounds {
+            let mut p = plane.to_array();
+            p[k[1]] = p[k[0]];
+            *plane = F32x8::new(p);
+        }
+        expect(b, "reached twice");
+        // a leaf whose count is not the number of primitives it lists
+        let mut b = bvh.clone();
+        let n = &mut b.nodes[with_leaf];
+        let mut l = n.child[0].as_leaf();
+        l.count += 1;
+        n.child[0] = NodeRef::leaf(l);
+        expect(b, "holds");
+    }
 }
