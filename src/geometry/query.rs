@@ -99,14 +99,20 @@ impl Geometry {
         } else {
             self.closest_bvh(ray, tmin, &mut best);
         }
+        self.closest_planes(ray, tmin, &mut best);
+        (best.prim >= 0).then_some((best.t, best.prim as u32))
+    }
+
+    /// Lowers `best` to the closest hit of one ray among the planes (which no BVH holds).
+    #[inline(always)]
+    fn closest_planes(&self, ray: &Ray, tmin: f32, best: &mut Best) {
         let base = self.base(PrimKind::Plane) as i32;
-        for i in self.planes_range() {
-            let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
-            if let Some(t) = intersect_plane(n, d, ray, tmin, f32::INFINITY) {
-                best.take(t, base + i as i32);
+        for k in self.planes_range() {
+            let (pn, d) = (self.planes.normal(k), self.planes.offset[k]);
+            if let Some(t) = intersect_plane(pn, d, ray, tmin, f32::INFINITY) {
+                best.take(t, base + k as i32);
             }
         }
-        (best.prim >= 0).then_some((best.t, best.prim as u32))
     }
 
     /// Lowers `best` to the closest hit of one ray among the BVH's primitives nearer than
@@ -243,6 +249,30 @@ impl Geometry {
         rays: &[RayPacket],
         hits: &mut [HitPacket],
     ) {
+        if !INTERLEAVE && !self.bvh.is_empty() {
+            // one walk at a time: each packet's lanes in place, without gathering them into the
+            // arrays below and scattering the hits back (5% of the instructions of torus100k's
+            // diffuse rays; PERF.md, sitting 19)
+            for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+                let tmin = r.tmin.as_array();
+                let mut active = bitmask(r.active);
+                while active != 0 {
+                    let l = active.trailing_zeros() as usize;
+                    active &= active - 1;
+                    let ray = r.ray(l);
+                    let mut b = Best {
+                        t: t[l],
+                        prim: prim[l],
+                    };
+                    self.closest_bvh(&ray, tmin[l], &mut b);
+                    self.closest_planes(&ray, tmin[l], &mut b);
+                    (t[l], prim[l]) = (b.t, b.prim);
+                }
+                (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
+            }
+            return;
+        }
         const N: usize = MAX_STREAM * LANES;
         // the active lanes, (packet, lane), and their closest hits so far
         let mut slot = [(0usize, 0usize); N];
@@ -271,12 +301,8 @@ impl Geometry {
                 let (r, tmin) = ray(i);
                 self.closest_brute(&r, tmin, b);
             }
-        } else if !INTERLEAVE {
-            for (i, b) in best[..n].iter_mut().enumerate() {
-                let (r, tmin) = ray(i);
-                self.closest_bvh(&r, tmin, b);
-            }
         } else {
+            // interleaved walks (one walk at a time returned above)
             let start: [f32; N] = std::array::from_fn(|i| best[i].t);
             self.bvh.closest_many(
                 n,
@@ -292,16 +318,10 @@ impl Geometry {
                 |leaf| self.prefetch_leaf(leaf),
             );
         }
-        let base = self.base(PrimKind::Plane) as i32;
         if !self.planes.is_empty() {
             for (i, b) in best[..n].iter_mut().enumerate() {
                 let (r, tmin) = ray(i);
-                for k in self.planes_range() {
-                    let (pn, d) = (self.planes.normal(k), self.planes.offset[k]);
-                    if let Some(t) = intersect_plane(pn, d, &r, tmin, f32::INFINITY) {
-                        b.take(t, base + k as i32);
-                    }
-                }
+                self.closest_planes(&r, tmin, b);
             }
         }
         let mut t: [[f32; LANES]; MAX_STREAM] = [[0.0; LANES]; MAX_STREAM];
