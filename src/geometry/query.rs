@@ -94,13 +94,20 @@ impl Geometry {
     /// The closest hit of one ray in `(tmin, tmax)`: `(t, geometry index)`.
     pub fn closest_hit(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(f32, u32)> {
         let mut best = Best { t: tmax, prim: -1 };
-        if self.bvh.is_empty() {
-            self.closest_brute(ray, tmin, &mut best);
-        } else {
-            self.closest_bvh(ray, tmin, &mut best);
-        }
-        self.closest_planes(ray, tmin, &mut best);
+        self.closest_one(ray, tmin, &mut best);
         (best.prim >= 0).then_some((best.t, best.prim as u32))
+    }
+
+    /// Lowers `best` to the closest hit of one ray among every primitive nearer than `best.t`:
+    /// the BVH's (or all of them, brute force, without one), then the planes.
+    #[inline(always)]
+    fn closest_one(&self, ray: &Ray, tmin: f32, best: &mut Best) {
+        if self.bvh.is_empty() {
+            self.closest_brute(ray, tmin, best);
+        } else {
+            self.closest_bvh(ray, tmin, best);
+        }
+        self.closest_planes(ray, tmin, best);
     }
 
     /// Lowers `best` to the closest hit of one ray among the planes (which no BVH holds).
@@ -249,7 +256,7 @@ impl Geometry {
         rays: &[RayPacket],
         hits: &mut [HitPacket],
     ) {
-        if !INTERLEAVE && !self.bvh.is_empty() {
+        if !INTERLEAVE || self.bvh.is_empty() {
             // one walk at a time: each packet's lanes in place, without gathering them into the
             // arrays below and scattering the hits back (5% of the instructions of torus100k's
             // diffuse rays; PERF.md, sitting 19)
@@ -265,8 +272,7 @@ impl Geometry {
                         t: t[l],
                         prim: prim[l],
                     };
-                    self.closest_bvh(&ray, tmin[l], &mut b);
-                    self.closest_planes(&ray, tmin[l], &mut b);
+                    self.closest_one(&ray, tmin[l], &mut b);
                     (t[l], prim[l]) = (b.t, b.prim);
                 }
                 (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
@@ -296,28 +302,21 @@ impl Geometry {
             let (p, l) = slot[i];
             (rays[p].ray(l), rays[p].tmin.as_array()[l])
         };
-        if self.bvh.is_empty() {
-            for (i, b) in best[..n].iter_mut().enumerate() {
+        // interleaved walks (one walk at a time, and brute force without a tree, returned above)
+        let start: [f32; N] = std::array::from_fn(|i| best[i].t);
+        self.bvh.closest_many(
+            n,
+            |i| {
                 let (r, tmin) = ray(i);
-                self.closest_brute(&r, tmin, b);
-            }
-        } else {
-            // interleaved walks (one walk at a time returned above)
-            let start: [f32; N] = std::array::from_fn(|i| best[i].t);
-            self.bvh.closest_many(
-                n,
-                |i| {
-                    let (r, tmin) = ray(i);
-                    (r, tmin, start[i])
-                },
-                |i, leaf, tmax| {
-                    let (r, tmin) = ray(i);
-                    self.closest_leaf(leaf, &r, tmin, &mut best[i]);
-                    *tmax = best[i].t;
-                },
-                |leaf| self.prefetch_leaf(leaf),
-            );
-        }
+                (r, tmin, start[i])
+            },
+            |i, leaf, tmax| {
+                let (r, tmin) = ray(i);
+                self.closest_leaf(leaf, &r, tmin, &mut best[i]);
+                *tmax = best[i].t;
+            },
+            |leaf| self.prefetch_leaf(leaf),
+        );
         if !self.planes.is_empty() {
             for (i, b) in best[..n].iter_mut().enumerate() {
                 let (r, tmin) = ray(i);
