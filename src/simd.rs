@@ -5,7 +5,7 @@
 //! are built on these. `wide` emits AVX2 only when it is enabled at compile time, which
 //! `.cargo/config.toml` does (`target-cpu=x86-64-v3`).
 
-use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
 
 use crate::math::Vec3;
 
@@ -37,6 +37,7 @@ pub trait Simd:
     + Neg<Output = Self>
     + BitAnd<Output = Self>
     + BitOr<Output = Self>
+    + BitXor<Output = Self>
     + Not<Output = Self>
 {
     /// Every lane `v`.

@@ -23,9 +23,7 @@ use crate::intersect::sphere::{affine_packet, affine_point, affine_vector, spher
 use crate::intersect::triangle::triangle_lanes;
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{
-    F32x4, F32x8, I32x4, I32x8, Mask, Simd, Vec3x4, Vec3x8, gt, lt, select, select_i32,
-};
+use crate::simd::{F32x4, F32x8, I32x8, Mask, Simd, Vec3x4, Vec3x8, gt, lt, select, select_i32};
 
 /// Primitives per block.
 pub const BLOCK: usize = 4;
@@ -211,17 +209,17 @@ impl Best {
     }
 }
 
-/// The lanes of a 4-lane candidate set that beat `best`: nearer, or as near and a smaller
-/// index.
+/// The lanes of a 4-lane candidate set that may beat `best`: no farther. The ties among them
+/// go to [`take_lanes`], whose [`Best::take`] keeps the smaller index, so the answer is that of
+/// the exact filter (nearer, or as near and a smaller index) without its index comparison in
+/// every block (ties are rare; the filter runs once per block a ray visits).
 #[inline(always)]
-fn closer4(t: F32x4, prim: &[u32; 4], best: &Best) -> F32x4 {
-    let bt = F32x4::splat(best.t);
-    let ids: I32x4 = bytemuck::cast(*prim);
-    let smaller: F32x4 = bytemuck::cast(ids.simd_lt(I32x4::splat(best.prim)));
-    t.lt(bt) | (t.eq(bt) & smaller)
+fn not_farther4(t: F32x4, best: &Best) -> F32x4 {
+    t.le(F32x4::splat(best.t))
 }
 
-/// Takes the best of the hit lanes `hit` (bits) of a block into `best`.
+/// Takes the best of the hit lanes `hit` (bits) of a block into `best`, each by
+/// [`Best::take`]: nearer, or as near and a smaller index.
 #[inline(always)]
 fn take_lanes(hit: u32, t: F32x4, prim: &[u32; 4], best: &mut Best) {
     let t = t.to_array();
@@ -304,7 +302,7 @@ impl Geometry {
             PrimKind::Triangle => {
                 for b in &self.blocks.triangles[first..first + blocks] {
                     let (hit, t) = triangle_block(b, o, d, tmin4);
-                    let hit = (hit & closer4(t, &b.prim, best)).bits();
+                    let hit = (hit & not_farther4(t, best)).bits();
                     if hit != 0 {
                         take_lanes(hit, t, &b.prim, best);
                     }
@@ -313,8 +311,8 @@ impl Geometry {
             PrimKind::Sphere => {
                 for b in &self.blocks.spheres[first..first + blocks] {
                     let (real, t0, t1) = sphere_block(b, o, d);
-                    let a0 = real & t0.gt(tmin4) & closer4(t0, &b.prim, best);
-                    let a1 = real & t1.gt(tmin4) & closer4(t1, &b.prim, best);
+                    let a0 = real & t0.gt(tmin4) & not_farther4(t0, best);
+                    let a1 = real & t1.gt(tmin4) & not_farther4(t1, best);
                     let hit = (a0 | a1).bits();
                     if hit != 0 {
                         take_lanes(hit, F32x4::pick(a0, t0, t1), &b.prim, best);
@@ -327,8 +325,8 @@ impl Geometry {
                     let (real, t0, t1) =
                         transformed_roots(&self.transformed.inverse(i as usize), ray);
                     let prim = [base + i; 4];
-                    let a0 = real & t0.gt(tmin4) & closer4(t0, &prim, best);
-                    let a1 = real & t1.gt(tmin4) & closer4(t1, &prim, best);
+                    let a0 = real & t0.gt(tmin4) & not_farther4(t0, best);
+                    let a1 = real & t1.gt(tmin4) & not_farther4(t1, best);
                     let hit = (a0 | a1).bits() & 1;
                     if hit != 0 {
                         take_lanes(hit, F32x4::pick(a0, t0, t1), &prim, best);

@@ -57,11 +57,13 @@ pub fn triangle_lanes<T: Simd>(
     let s = origin - v0;
     let r = s.cross(dir);
     let det = -dir.dot(ng);
-    let sign = T::pick(det.lt(zero), T::splat(-1.0), T::splat(1.0));
+    // `x * sign(det)` as a flip of the sign bit (Embree's form): the same bits wherever `det`
+    // is not zero, and a zero `det` is outside below
+    let sign = det & T::splat(-0.0);
     let abs_det = det.abs_lanes();
-    let u = r.dot(e2) * sign;
-    let v = -r.dot(e1) * sign;
-    let t = s.dot(ng) * sign;
+    let u = r.dot(e2) ^ sign;
+    let v = -r.dot(e1) ^ sign;
+    let t = s.dot(ng) ^ sign;
     let inside = !det.eq(zero) & u.ge(zero) & v.ge(zero) & (u + v).le(abs_det);
     (inside, t / abs_det)
 }
