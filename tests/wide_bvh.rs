@@ -224,6 +224,13 @@ fn ray_groups(rng: &mut Rng, groups: usize) -> Vec<Vec<RayPacket>> {
                     });
                     let mut p = RayPacket::from_rays(&rays, 1e-3);
                     p.active = mask_from_bits(rng.below(255) + 1);
+                    // every fourth group has lanes starting behind their origin, as an
+                    // orthographic camera's do (walks that are not forward)
+                    if g % 4 == 3 {
+                        p.tmin = from_lanes(std::array::from_fn(|_| {
+                            if rng.chance(0.5) { -0.5 } else { 1e-3 }
+                        }));
+                    }
                     p
                 })
                 .collect()

@@ -3,10 +3,9 @@
 //! walk is one long chain of dependent loads and compares (node, box test, child, next node);
 //! interleaving independent walks lets the processor overlap their chains.
 
-use super::single::{Ray1, STACK, pop_nearer};
+use super::single::{Ray1, Ray1x8, STACK, pop_nearer};
 use super::stack::Stack;
 use super::{Bvh8, Leaf, NodeRef};
-use crate::math::Ray;
 use crate::simd::F32x8;
 
 /// Walks in flight (measured: PERF.md, "Single rays").
@@ -23,31 +22,18 @@ struct Walk {
 }
 
 impl Bvh8 {
-    /// The closest hits of rays `0..n`, `ray(i)` giving ray `i` and its `(tmin, tmax)`:
-    /// [`Bvh8::closest`] for each, with [`IN_FLIGHT`] walks interleaved. `leaf(i, leaf, tmax)`
+    /// The closest hits of rays `0..n`, `ray(i)` giving ray `i` as `(packet, lane, tmin, tmax)`:
+    /// lane `lane` of `packets[packet]`, a forward ray (`tmin >= 0`), whose walk is
+    /// [`Bvh8::closest_lane`]'s, with [`IN_FLIGHT`] walks interleaved. `leaf(i, leaf, tmax)`
     /// tests the leaf's primitives for ray `i` and lowers its `tmax` on hits; `touch(leaf)`
     /// starts fetching a leaf's primitives when a walk pushes it for later (measured: PERF.md,
     /// "Prefetching pushed leaves"). Each ray's walk is exactly its single-ray walk, so the
     /// results are the same.
     pub fn closest_many(
         &self,
+        packets: &[Ray1x8],
         n: usize,
-        ray: impl Fn(usize) -> (Ray, f32, f32),
-        leaf: impl FnMut(usize, Leaf, &mut f32),
-        touch: impl Fn(Leaf),
-    ) {
-        if (0..n).all(|i| ray(i).1 >= 0.0) {
-            self.closest_many_walks::<true>(n, ray, leaf, touch);
-        } else {
-            self.closest_many_walks::<false>(n, ray, leaf, touch);
-        }
-    }
-
-    /// [`Bvh8::closest_many`], `FORWARD` when every `tmin >= 0` ([`super::widen_exit`]).
-    fn closest_many_walks<const FORWARD: bool>(
-        &self,
-        n: usize,
-        ray: impl Fn(usize) -> (Ray, f32, f32),
+        ray: impl Fn(usize) -> (usize, usize, f32, f32),
         mut leaf: impl FnMut(usize, Leaf, &mut f32),
         touch: impl Fn(Leaf),
     ) {
@@ -55,9 +41,10 @@ impl Bvh8 {
             return;
         }
         let start = |i: usize| {
-            let (r, tmin, tmax) = ray(i);
+            let (p, l, tmin, tmax) = ray(i);
+            debug_assert!(tmin >= 0.0);
             Walk {
-                ray: Ray1::new::<FORWARD>(&r),
+                ray: packets[p].lane(l),
                 tmin: F32x8::splat(tmin),
                 tmax,
                 cur: self.root,
@@ -67,8 +54,9 @@ impl Bvh8 {
         };
         // a walk's next ray reuses its storage: a new `Walk` moved in would copy the stack
         let restart = |w: &mut Walk, i: usize| {
-            let (r, tmin, tmax) = ray(i);
-            w.ray = Ray1::new::<FORWARD>(&r);
+            let (p, l, tmin, tmax) = ray(i);
+            debug_assert!(tmin >= 0.0);
+            w.ray = packets[p].lane(l);
             w.tmin = F32x8::splat(tmin);
             w.tmax = tmax;
             w.cur = self.root;
@@ -93,7 +81,7 @@ impl Bvh8 {
                     None
                 } else {
                     let node = &self.nodes[w.cur.index()];
-                    self.descend::<FORWARD>(&w.ray, node, w.tmin, w.tmax, &mut w.stack, &touch)
+                    self.descend::<true>(&w.ray, node, w.tmin, w.tmax, &mut w.stack, &touch)
                 };
                 match step.or_else(|| pop_nearer(&mut w.stack, w.tmax)) {
                     Some(c) => w.cur = c,

@@ -34,6 +34,7 @@ mod test_rng;
 
 pub use interleave::IN_FLIGHT;
 pub use packet::PACKET_STACK_DEPTH;
+pub use single::Ray1x8;
 pub use stream::{MAX_STREAM, StreamMasks};
 
 use crate::math::Vec3;

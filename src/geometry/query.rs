@@ -11,7 +11,7 @@
 
 use super::blocks::Best;
 use super::{Geometry, PrimKind};
-use crate::bvh::MAX_STREAM;
+use crate::bvh::{MAX_STREAM, Ray1x8};
 use crate::intersect::sphere::affine_packet;
 use crate::intersect::sphere::sphere_lanes;
 use crate::intersect::{
@@ -21,8 +21,8 @@ use crate::intersect::{
 use crate::math::{Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::simd::{
-    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, gt, lanes, lt, mask_none,
-    select, select_i32,
+    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, ge, gt, lanes, lt,
+    mask_none, select, select_i32,
 };
 
 /// How a group of packets is traced (see [`Geometry::closest_hit_batch`]).
@@ -63,6 +63,13 @@ pub const SMALL_TREE_NODES: usize = 1024;
 /// come from the caches (torus100k, 6,978 nodes: one walk at a time -1 to +4% on diffuse rays,
 /// +2 to +9% on incoherent mirror rays). Measured: PERF.md, sittings 12–15, "One walk or two".
 pub const INTERLEAVE_NODES: usize = 16384;
+
+/// True when every active lane of `rays` is a forward ray (`tmin >= 0`), whose walks
+/// [`Ray1x8`] prepares.
+fn forward(rays: &RayPacket) -> bool {
+    let active = bitmask(rays.active);
+    bitmask(ge(rays.tmin, F32x8::splat(0.0))) & active == active
+}
 
 /// The smallest cosine between the active directions of `rays` and their mean (1 when no
 /// lane is active).
@@ -134,6 +141,25 @@ impl Geometry {
             // inlined into the walk, as the other leaf tests of this file but the closest-hit
             // stream's: called, it made the walk save and reload seven vector registers around
             // each leaf, about 40 instructions (PERF.md, sitting 20)
+            #[inline(always)]
+            |leaf, limit| {
+                self.closest_leaf(leaf, ray, tmin, best);
+                *limit = best.t;
+            },
+            |leaf| self.prefetch_leaf(leaf),
+        );
+    }
+
+    /// [`Geometry::closest_bvh`] for lane `l` of a packet prepared by [`Ray1x8::new`] (`ray`
+    /// is that lane, its `tmin` at least 0).
+    #[inline(always)]
+    fn closest_bvh_lane(&self, rays: &Ray1x8, l: usize, ray: &Ray, tmin: f32, best: &mut Best) {
+        let mut limit = best.t;
+        self.bvh.closest_lane(
+            rays,
+            l,
+            tmin,
+            &mut limit,
             #[inline(always)]
             |leaf, limit| {
                 self.closest_leaf(leaf, ray, tmin, best);
@@ -263,7 +289,7 @@ impl Geometry {
         rays: &[RayPacket],
         hits: &mut [HitPacket],
     ) {
-        if !INTERLEAVE || self.bvh.is_empty() {
+        if !INTERLEAVE || self.bvh.is_empty() || rays.is_empty() || !rays.iter().all(forward) {
             // one walk at a time: each packet's lanes in place, without gathering them into the
             // arrays below and scattering the hits back (5% of the instructions of torus100k's
             // diffuse rays; PERF.md, sitting 19)
@@ -271,6 +297,9 @@ impl Geometry {
                 let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
                 let tmin = r.tmin.as_array();
                 let mut active = bitmask(r.active);
+                // forward rays (every `tmin >= 0`, all but an orthographic camera's) are
+                // prepared for their walks all 8 at once
+                let prepared = (forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
                 while active != 0 {
                     let l = active.trailing_zeros() as usize;
                     active &= active - 1;
@@ -279,7 +308,13 @@ impl Geometry {
                         t: t[l],
                         prim: prim[l],
                     };
-                    self.closest_one(&ray, tmin[l], &mut b);
+                    match &prepared {
+                        Some(p) => {
+                            self.closest_bvh_lane(p, l, &ray, tmin[l], &mut b);
+                            self.closest_planes(&ray, tmin[l], &mut b);
+                        }
+                        None => self.closest_one(&ray, tmin[l], &mut b),
+                    }
                     (t[l], prim[l]) = (b.t, b.prim);
                 }
                 (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
@@ -309,13 +344,18 @@ impl Geometry {
             let (p, l) = slot[i];
             (rays[p].ray(l), rays[p].tmin.as_array()[l])
         };
-        // interleaved walks (one walk at a time, and brute force without a tree, returned above)
+        // interleaved walks of forward rays (one walk at a time, brute force without a tree,
+        // and groups with a ray of negative `tmin` returned above), prepared 8 at once
         let start: [f32; N] = std::array::from_fn(|i| best[i].t);
+        let last = rays.len() - 1;
+        let prepared: [Ray1x8; MAX_STREAM] =
+            std::array::from_fn(|p| Ray1x8::new(&rays[p.min(last)]));
         self.bvh.closest_many(
+            &prepared,
             n,
             |i| {
-                let (r, tmin) = ray(i);
-                (r, tmin, start[i])
+                let (p, l) = slot[i];
+                (p, l, rays[p].tmin.as_array()[l], start[i])
             },
             #[inline(always)]
             |i, leaf, tmax| {
