@@ -283,19 +283,19 @@ pub fn reduce_max(a: F32x8) -> f32 {
     )
 }
 
-/// Lane-wise `a * b - c` with one rounding (a fused multiply-subtract): one instruction where
-/// the build enables FMA (x86-64-v3), lane by lane through `f32::mul_add` otherwise (slow, but
-/// the same single rounding, which the box tests' error bound relies on).
+/// Lane-wise `a * b + c` with one rounding (a fused multiply-add): one instruction where the
+/// build enables FMA (x86-64-v3), lane by lane through `f32::mul_add` otherwise (slow, but the
+/// same single rounding, which the box tests' error bound relies on).
 #[inline(always)]
-pub fn fused_mul_sub(a: F32x8, b: F32x8, c: F32x8) -> F32x8 {
+pub fn fused_mul_add(a: F32x8, b: F32x8, c: F32x8) -> F32x8 {
     #[cfg(all(target_feature = "avx", target_feature = "fma"))]
     {
-        a.mul_sub(b, c)
+        a.mul_add(b, c)
     }
     #[cfg(not(all(target_feature = "avx", target_feature = "fma")))]
     {
         let (a, b, c) = (a.to_array(), b.to_array(), c.to_array());
-        F32x8::new(std::array::from_fn(|i| a[i].mul_add(b[i], -c[i])))
+        F32x8::new(std::array::from_fn(|i| a[i].mul_add(b[i], c[i])))
     }
 }
 
@@ -541,23 +541,23 @@ mod tests {
     }
 
     #[test]
-    fn fused_mul_sub_rounds_once() {
+    fn fused_mul_add_rounds_once() {
         // 1 + 2^-12 squared is 1 + 2^-11 + 2^-24: the last bit is lost when the product is
         // rounded first, kept by the fused operation.
         let a = 1.0 + f32::EPSILON * 2048.0;
-        let fused = lanes(fused_mul_sub(
+        let fused = lanes(fused_mul_add(
             F32x8::splat(a),
             F32x8::splat(a),
-            F32x8::splat(1.0),
+            F32x8::splat(-1.0),
         ));
         assert_eq!(fused[0], a.mul_add(a, -1.0));
         assert_eq!(fused[0], 2f32.powi(-11) + 2f32.powi(-24));
         assert_ne!(fused[0], a * a - 1.0);
         let x: [f32; LANES] = std::array::from_fn(|i| 0.1 + i as f32 * 1.37);
         let y: [f32; LANES] = std::array::from_fn(|i| -3.3 + i as f32 * 0.71);
-        let got = lanes(fused_mul_sub(F32x8::new(x), F32x8::new(y), F32x8::new(y)));
+        let got = lanes(fused_mul_add(F32x8::new(x), F32x8::new(y), F32x8::new(y)));
         for i in 0..LANES {
-            assert_eq!(got[i].to_bits(), x[i].mul_add(y[i], -y[i]).to_bits());
+            assert_eq!(got[i].to_bits(), x[i].mul_add(y[i], y[i]).to_bits());
         }
     }
 

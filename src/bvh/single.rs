@@ -9,7 +9,7 @@ use super::{
 };
 use crate::math::Ray;
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, bitmask, fused_mul_sub, lt, select};
+use crate::simd::{F32x8, bitmask, fused_mul_add, lt, select};
 use glam::Vec3A;
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
@@ -20,7 +20,9 @@ pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 /// enters (`near`) and leaves (`far`) through on each axis, and `origin * inv` on each axis
 /// rounded up for the entry planes and down for the exit planes.
 ///
-/// A plane's distance is then `plane * inv - o_inv` in one fused operation. Its product is
+/// A plane's distance is then `plane * inv - o_inv` in one fused operation, kept as
+/// `plane * inv + (-o_inv)` (the same bits: the negation is exact), so that a walk broadcasts
+/// the offsets it reads without negating them first. Its product is
 /// exact and the rounded-up (entry) or rounded-down (exit) `o_inv` errs only to the safe side,
 /// so the one rounding left is relative to the distance itself, like that of the inverse:
 /// the widening of the exit distance covers both ([`super::ROBUST`]). Embree's kernels use this
@@ -34,8 +36,9 @@ pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 pub(super) struct Ray1 {
     inv: [F32x8; 3],
     inv_exit: [F32x8; 3],
-    oi_near: [F32x8; 3],
-    oi_far: [F32x8; 3],
+    /// `-(o * inv)`, rounded up before the negation (entry planes) and down (exit planes).
+    neg_oi_near: [F32x8; 3],
+    neg_oi_far: [F32x8; 3],
     near: [Plane; 3],
     far: [Plane; 3],
 }
@@ -64,8 +67,8 @@ impl Ray1 {
         Ray1 {
             inv: splat(inv),
             inv_exit: splat(inv_exit),
-            oi_near: splat(up),
-            oi_far: splat(down),
+            neg_oi_near: splat(-up),
+            neg_oi_far: splat(-down),
             near: Plane::ENTRY_OF_OCTANT[octant],
             far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
@@ -83,13 +86,17 @@ impl Ray1 {
         tmax: F32x8,
     ) -> (u32, F32x8) {
         let entry = |plane: Plane, axis: usize| {
-            fused_mul_sub(n.bounds[plane as usize], self.inv[axis], self.oi_near[axis])
+            fused_mul_add(
+                n.bounds[plane as usize],
+                self.inv[axis],
+                self.neg_oi_near[axis],
+            )
         };
         let exit = |plane: Plane, axis: usize| {
-            fused_mul_sub(
+            fused_mul_add(
                 n.bounds[plane as usize],
                 self.inv_exit[axis],
-                self.oi_far[axis],
+                self.neg_oi_far[axis],
             )
         };
         // a forward ray's exits come widened; its `tmax` (known before the node) is widened here
@@ -112,8 +119,8 @@ impl Ray1 {
 pub struct Ray1x8 {
     inv: [F32x8; 3],
     inv_exit: [F32x8; 3],
-    oi_near: [F32x8; 3],
-    oi_far: [F32x8; 3],
+    neg_oi_near: [F32x8; 3],
+    neg_oi_far: [F32x8; 3],
     /// Bit `l` of `down[axis]`: lane `l`'s direction is negative on `axis`.
     down: [u32; 3],
 }
@@ -130,8 +137,8 @@ impl Ray1x8 {
         Ray1x8 {
             inv,
             inv_exit,
-            oi_near: near,
-            oi_far: far,
+            neg_oi_near: near.map(|x: F32x8| -x),
+            neg_oi_far: far.map(|x: F32x8| -x),
             down: inv.map(|i| bitmask(lt(i, F32x8::splat(0.0)))),
         }
     }
@@ -145,8 +152,8 @@ impl Ray1x8 {
         Ray1 {
             inv: splat(&self.inv),
             inv_exit: splat(&self.inv_exit),
-            oi_near: splat(&self.oi_near),
-            oi_far: splat(&self.oi_far),
+            neg_oi_near: splat(&self.neg_oi_near),
+            neg_oi_far: splat(&self.neg_oi_far),
             near: Plane::ENTRY_OF_OCTANT[octant],
             far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
@@ -417,7 +424,7 @@ mod tests {
     /// Every field of a prepared ray as bits (planes as their indices).
     fn bits(r: &Ray1) -> Vec<u32> {
         let mut v = Vec::new();
-        for c in [&r.inv, &r.inv_exit, &r.oi_near, &r.oi_far] {
+        for c in [&r.inv, &r.inv_exit, &r.neg_oi_near, &r.neg_oi_far] {
             for x in c {
                 v.extend(x.to_array().map(f32::to_bits));
             }
