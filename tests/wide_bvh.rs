@@ -2,7 +2,7 @@
 //! builder setting and on the edge cases (one primitive, every primitive at one point, flat
 //! scenes, more primitives than a leaf may hold at one point), leaf blocks with partly filled
 //! lanes report only their own primitives, and every path through the tree (single rays,
-//! interleaved single rays, 8-ray packets, streams of packets, the per-group choice) gives the
+//! 8-ray packets, streams of packets, the per-group choice) gives the
 //! same `(t, primitive)` bit for bit on the same rays, ties in `t` included.
 
 mod common;

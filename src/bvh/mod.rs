@@ -14,7 +14,6 @@
 //!                                     '--LeafSink::leaf(tag, primitives)--> caller's leaf blocks
 //! traversals (leaf test as a closure):
 //!     single.rs  one ray, all 8 children per pass, nearest first     (incoherent rays)
-//!     interleave.rs  single-ray walks of many rays in turn         (incoherent rays, big trees)
 //!     packet.rs  8 rays, child by child, per-lane entry distances     (small coherent groups;
 //!                [`Bvh8::closest_packet_probed`] reports each node to a [`TraversalProbe`],
 //!                the cost heatmap's counter)
@@ -23,7 +22,6 @@
 
 pub mod arena;
 pub mod build;
-mod interleave;
 mod packet;
 mod single;
 mod stack;
@@ -32,7 +30,6 @@ mod stream;
 #[cfg(test)]
 mod test_rng;
 
-pub use interleave::IN_FLIGHT;
 pub use packet::PACKET_STACK_DEPTH;
 pub use single::Ray1x8;
 pub use stream::{MAX_STREAM, StreamMasks};

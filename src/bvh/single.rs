@@ -14,7 +14,7 @@ use glam::Vec3A;
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
 /// than it pops.
-pub(super) const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
+const STACK: usize = (WIDTH - 1) * MAX_DEPTH + 1;
 
 /// One ray prepared for 8-wide box tests: splatted reciprocal direction, the box planes it
 /// enters (`near`) and leaves (`far`) through on each axis, and `origin * inv` on each axis
@@ -111,11 +111,11 @@ impl Ray1 {
     }
 }
 
-/// The 8 rays of a packet prepared for single-ray walks as forward rays (`tmin >= 0`): what
-/// [`Ray1::new`] computes for one ray (reciprocal, directed offsets, octant), computed for all
-/// 8 lanes at once, so that a walk only broadcasts its lane ([`Ray1x8::lane`]: the same bits as
-/// `Ray1::new::<true>` of that lane). A ray's own preparation was about a fifth of a diffuse
-/// ray's instructions on torus100k (PERF.md, sitting 20).
+/// The 8 rays of a packet prepared for single-ray walks ([`Bvh8::closest_lane`]) as forward
+/// rays (`tmin >= 0`): what a walk of [`Bvh8::closest`] computes for its one ray first
+/// (reciprocal, directed offsets, octant), computed for all 8 lanes at once, so that a walk
+/// only broadcasts its lane (the same bits). A ray's own preparation was about a fifth of a
+/// diffuse ray's instructions on torus100k (PERF.md, sitting 20).
 pub struct Ray1x8 {
     inv: [F32x8; 3],
     inv_exit: [F32x8; 3],
@@ -145,7 +145,7 @@ impl Ray1x8 {
 
     /// Lane `l` as a forward ray for [`Ray1::test`].
     #[inline(always)]
-    pub(super) fn lane(&self, l: usize) -> Ray1 {
+    fn lane(&self, l: usize) -> Ray1 {
         // each lane read in place (a copy of the array went through a stack slot per column)
         let splat = |v: &[F32x8; 3]| std::array::from_fn(|a| F32x8::splat(v[a].as_array()[l]));
         let octant = (0..3).fold(0, |o, a| o | (self.down[a] >> l & 1) << a) as usize;
@@ -192,7 +192,7 @@ impl Bvh8 {
     /// The closest hit of one ray: visits every leaf the ray may hit nearer than `tmax`,
     /// nearest child first; `leaf(leaf, tmax)` tests the leaf's primitives and lowers `tmax`
     /// where it finds a nearer hit; `touch(leaf)` starts fetching a leaf the walk pushes for
-    /// later, as in [`Bvh8::closest_many`].
+    /// later (a leaf is fetched while the walk tests the nearer children).
     #[inline(always)]
     pub fn closest(
         &self,
@@ -276,7 +276,7 @@ impl Bvh8 {
     /// enters before `tmax`, the other entered children pushed farthest first; `None` when it
     /// enters none. Pushed interior nodes are prefetched here, pushed leaves by `touch`.
     #[inline(always)]
-    pub(super) fn descend<const FORWARD: bool>(
+    fn descend<const FORWARD: bool>(
         &self,
         r: &Ray1,
         n: &Node8,
@@ -387,7 +387,7 @@ impl Bvh8 {
 
 /// Pops entries until one the ray may still enter before `tmax`.
 #[inline(always)]
-pub(super) fn pop_nearer(stack: &mut Stack<(NodeRef, f32), STACK>, tmax: f32) -> Option<NodeRef> {
+fn pop_nearer(stack: &mut Stack<(NodeRef, f32), STACK>, tmax: f32) -> Option<NodeRef> {
     loop {
         match stack.pop() {
             None => return None,

@@ -20,12 +20,6 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         }
     }
 
-    /// Empties the stack.
-    #[inline(always)]
-    pub fn clear(&mut self) {
-        self.len = 0;
-    }
-
     /// Pushes `item`; panics when full (the callers size `N` by the tree's depth bound).
     #[inline(always)]
     pub fn push(&mut self, item: T) {

@@ -36,7 +36,7 @@ use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
 use blocks::{BLOCK, BlockSink, Blocks};
 use normals::CornerNormals;
-pub use query::{COHERENT_COS, INTERLEAVE_NODES, Path, SMALL_TREE_NODES, coherence};
+pub use query::{COHERENT_COS, Path, SMALL_TREE_NODES, coherence};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 
 /// The kinds of primitive, in geometry-index order.

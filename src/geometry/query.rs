@@ -34,14 +34,11 @@ pub enum Path {
     Packet,
     /// Ray by ray, one walk at a time ([`Geometry::closest_hit`]).
     Single,
-    /// Ray by ray, several walks interleaved ([`crate::bvh::Bvh8::closest_many`]) for closest
-    /// hits; any-hit queries take the [`Path::Single`] walk (there is no interleaved one).
-    Interleaved,
 }
 
 impl Path {
     /// Every path, for tests that hold them to one another.
-    pub const ALL: [Path; 4] = [Path::Stream, Path::Packet, Path::Single, Path::Interleaved];
+    pub const ALL: [Path; 3] = [Path::Stream, Path::Packet, Path::Single];
 }
 
 /// The smallest cosine between a group's ray directions and their mean at which the group
@@ -55,14 +52,6 @@ pub const COHERENT_COS: f32 = 0.9;
 /// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them ray
 /// by ray (torus1m diffuse: single rays 1.3x faster). Measured: PERF.md, "Which path".
 pub const SMALL_TREE_NODES: usize = 1024;
-
-/// Trees with at least this many interior nodes (4 MiB of them) trace incoherent rays with
-/// several walks interleaved, smaller ones one walk at a time. Interleaving overlaps the walks'
-/// memory latency, which pays where the tree's nodes and leaves come from DRAM (torus1m, 70,264
-/// nodes: diffuse +3 to +15%), while its bookkeeping costs about what it hides where they
-/// come from the caches (torus100k, 6,978 nodes: one walk at a time -1 to +4% on diffuse rays,
-/// +2 to +9% on incoherent mirror rays). Measured: PERF.md, sittings 12–15, "One walk or two".
-pub const INTERLEAVE_NODES: usize = 16384;
 
 /// True when every active lane of `rays` is a forward ray (`tmin >= 0`), whose walks
 /// [`Ray1x8`] prepares.
@@ -130,7 +119,7 @@ impl Geometry {
     }
 
     /// Lowers `best` to the closest hit of one ray among the BVH's primitives nearer than
-    /// `best.t` (one walk; the leaves it pushes are prefetched, as the interleaved walks do).
+    /// `best.t` (one walk; the leaves it pushes are prefetched).
     #[inline(always)]
     fn closest_bvh(&self, ray: &Ray, tmin: f32, best: &mut Best) {
         let mut limit = best.t;
@@ -243,19 +232,18 @@ impl Geometry {
     }
 
     /// The path for a group of packets: a stream when their directions are coherent
-    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]), single
-    /// rays in a bigger one, and single rays with their walks interleaved in a big one
-    /// ([`INTERLEAVE_NODES`]).
+    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and single
+    /// rays in a bigger one. (Single rays with two walks interleaved, the path of the biggest
+    /// trees until the walks took their rays prepared a packet at a time, fell behind one walk
+    /// at a time on torus1m too: PERF.md, sitting 20.)
     pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
         let nodes = self.bvh.nodes.len();
         if coherence(rays) >= COHERENT_COS {
             Path::Stream
         } else if nodes < SMALL_TREE_NODES {
             Path::Packet
-        } else if nodes < INTERLEAVE_NODES {
-            Path::Single
         } else {
-            Path::Interleaved
+            Path::Single
         }
     }
 
@@ -276,111 +264,39 @@ impl Geometry {
                     self.closest_hit_packet(r, h);
                 }
             }
-            Path::Single => self.closest_hit_singles::<false>(rays, hits),
-            Path::Interleaved => self.closest_hit_singles::<true>(rays, hits),
+            Path::Single => self.closest_hit_singles(rays, hits),
         }
     }
 
-    /// Closest hits of up to [`MAX_STREAM`] packets ray by ray, with several walks interleaved
-    /// if `INTERLEAVE` ([`crate::bvh::Bvh8::closest_many`]); the same answers as
-    /// [`Geometry::closest_hit`] either way.
-    fn closest_hit_singles<const INTERLEAVE: bool>(
-        &self,
-        rays: &[RayPacket],
-        hits: &mut [HitPacket],
-    ) {
-        if !INTERLEAVE || self.bvh.is_empty() || rays.is_empty() || !rays.iter().all(forward) {
-            // one walk at a time: each packet's lanes in place, without gathering them into the
-            // arrays below and scattering the hits back (5% of the instructions of torus100k's
-            // diffuse rays; PERF.md, sitting 19)
-            for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
-                let tmin = r.tmin.as_array();
-                let mut active = bitmask(r.active);
-                // forward rays (every `tmin >= 0`, all but an orthographic camera's) are
-                // prepared for their walks all 8 at once
-                let prepared = (forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
-                while active != 0 {
-                    let l = active.trailing_zeros() as usize;
-                    active &= active - 1;
-                    let ray = r.ray(l);
-                    let mut b = Best {
-                        t: t[l],
-                        prim: prim[l],
-                    };
-                    match &prepared {
-                        Some(p) => {
-                            self.closest_bvh_lane(p, l, &ray, tmin[l], &mut b);
-                            self.closest_planes(&ray, tmin[l], &mut b);
-                        }
-                        None => self.closest_one(&ray, tmin[l], &mut b),
-                    }
-                    (t[l], prim[l]) = (b.t, b.prim);
-                }
-                (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
-            }
-            return;
-        }
-        const N: usize = MAX_STREAM * LANES;
-        // the active lanes, (packet, lane), and their closest hits so far
-        let mut slot = [(0usize, 0usize); N];
-        let mut best = [Best { t: 0.0, prim: -1 }; N];
-        let mut n = 0;
-        for (p, (r, h)) in rays.iter().zip(hits.iter()).enumerate() {
-            let (ts, prims) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+    /// Closest hits of up to [`MAX_STREAM`] packets ray by ray, one walk at a time: the same
+    /// answers as [`Geometry::closest_hit`]. Each packet's lanes are walked in place (gathering
+    /// a group's rays into arrays and scattering their hits back cost 5% of torus100k's diffuse
+    /// instructions; PERF.md, sitting 19), forward rays (every `tmin >= 0`, all but an
+    /// orthographic camera's) prepared for their walks all 8 at once ([`Ray1x8`]).
+    fn closest_hit_singles(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+            let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
+            let tmin = r.tmin.as_array();
             let mut active = bitmask(r.active);
+            let prepared = (forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
             while active != 0 {
                 let l = active.trailing_zeros() as usize;
                 active &= active - 1;
-                slot[n] = (p, l);
-                best[n] = Best {
-                    t: ts[l],
-                    prim: prims[l],
+                let ray = r.ray(l);
+                let mut b = Best {
+                    t: t[l],
+                    prim: prim[l],
                 };
-                n += 1;
+                match &prepared {
+                    Some(p) => {
+                        self.closest_bvh_lane(p, l, &ray, tmin[l], &mut b);
+                        self.closest_planes(&ray, tmin[l], &mut b);
+                    }
+                    None => self.closest_one(&ray, tmin[l], &mut b),
+                }
+                (t[l], prim[l]) = (b.t, b.prim);
             }
-        }
-        let ray = |i: usize| {
-            let (p, l) = slot[i];
-            (rays[p].ray(l), rays[p].tmin.as_array()[l])
-        };
-        // interleaved walks of forward rays (one walk at a time, brute force without a tree,
-        // and groups with a ray of negative `tmin` returned above), prepared 8 at once
-        let start: [f32; N] = std::array::from_fn(|i| best[i].t);
-        let last = rays.len() - 1;
-        let prepared: [Ray1x8; MAX_STREAM] =
-            std::array::from_fn(|p| Ray1x8::new(&rays[p.min(last)]));
-        self.bvh.closest_many(
-            &prepared,
-            n,
-            |i| {
-                let (p, l) = slot[i];
-                (p, l, rays[p].tmin.as_array()[l], start[i])
-            },
-            #[inline(always)]
-            |i, leaf, tmax| {
-                let (r, tmin) = ray(i);
-                self.closest_leaf(leaf, &r, tmin, &mut best[i]);
-                *tmax = best[i].t;
-            },
-            |leaf| self.prefetch_leaf(leaf),
-        );
-        if !self.planes.is_empty() {
-            for (i, b) in best[..n].iter_mut().enumerate() {
-                let (r, tmin) = ray(i);
-                self.closest_planes(&r, tmin, b);
-            }
-        }
-        let mut t: [[f32; LANES]; MAX_STREAM] = [[0.0; LANES]; MAX_STREAM];
-        let mut prim: [[i32; LANES]; MAX_STREAM] = [[0; LANES]; MAX_STREAM];
-        for (p, h) in hits.iter().enumerate() {
-            (t[p], prim[p]) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
-        }
-        for (&(p, l), b) in slot[..n].iter().zip(&best) {
-            (t[p][l], prim[p][l]) = (b.t, b.prim);
-        }
-        for (p, h) in hits.iter_mut().enumerate() {
-            (h.t, h.prim) = (F32x8::new(t[p]), I32x8::new(prim[p]));
+            (h.t, h.prim) = (F32x8::new(t), I32x8::new(prim));
         }
     }
 
@@ -464,7 +380,7 @@ impl Geometry {
                     *o = self.occluded_packet(r, *t);
                 }
             }
-            Path::Single | Path::Interleaved => {
+            Path::Single => {
                 for ((r, t), o) in rays.iter().zip(tmax).zip(out) {
                     let (tmin, tmax, active) = (lanes(r.tmin), lanes(*t), bitmask(r.active));
                     let mut bits = 0;
