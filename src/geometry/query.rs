@@ -127,9 +127,10 @@ impl Geometry {
             ray,
             tmin,
             &mut limit,
-            // inlined into the walk, as the other leaf tests of this file but the closest-hit
-            // stream's: called, it made the walk save and reload seven vector registers around
-            // each leaf, about 40 instructions (PERF.md, sitting 20)
+            // inlined into the walk, as are the single-ray any-hit and the any-hit stream's
+            // leaf tests below (the packet walks' and the closest-hit stream's stay calls,
+            // which measured faster): called, it made the walk save and reload seven vector
+            // registers around each leaf, about 40 instructions (PERF.md, sitting 20)
             #[inline(always)]
             |leaf, limit| {
                 self.closest_leaf(leaf, ray, tmin, best);
@@ -165,12 +166,11 @@ impl Geometry {
         if self.bvh.is_empty() {
             self.closest_brute_packet(rays, t, prim);
         } else {
-            self.bvh.closest_packet(
-                rays,
-                t,
-                #[inline(always)]
-                |leaf, rays, lanes, t| self.closest_leaf_packet(leaf, rays, lanes, t, prim),
-            );
+            // a call: inlined, it cost spheres4096's incoherent packets about 3% (PERF.md,
+            // sitting 20)
+            self.bvh.closest_packet(rays, t, |leaf, rays, lanes, t| {
+                self.closest_leaf_packet(leaf, rays, lanes, t, prim)
+            });
         }
         self.closest_planes_packet(rays, t, prim);
     }
@@ -326,12 +326,9 @@ impl Geometry {
         let occluded = if self.bvh.is_empty() {
             self.occluded_brute_packet(rays, tmax)
         } else {
-            self.bvh.occluded_packet(
-                rays,
-                tmax,
-                #[inline(always)]
-                |leaf, rays, lanes| self.occluded_leaf_packet(leaf, rays, lanes, tmax),
-            )
+            self.bvh.occluded_packet(rays, tmax, |leaf, rays, lanes| {
+                self.occluded_leaf_packet(leaf, rays, lanes, tmax)
+            })
         };
         occluded | self.occluded_planes_packet(rays, !occluded & rays.active, tmax)
     }
