@@ -4,12 +4,12 @@
 
 use super::stack::Stack;
 use super::{
-    Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, ROBUST, WIDTH, safe_inverse, safe_inverse8,
-    slab_octant, widen,
+    Bvh8, HI, LO, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, ROBUST, WIDTH, safe_inverse,
+    safe_inverse8, slab_octant, widen,
 };
 use crate::math::Ray;
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, bitmask, fused_mul_add, lt, select};
+use crate::simd::{F32x8, Mask, bitmask, fused_mul_add, ge, lt, select};
 use glam::Vec3A;
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
@@ -121,7 +121,9 @@ pub struct Ray1x8 {
     inv_exit: [F32x8; 3],
     neg_oi_near: [F32x8; 3],
     neg_oi_far: [F32x8; 3],
-    /// Bit `l` of `down[axis]`: lane `l`'s direction is negative on `axis`.
+    /// Lane `l`'s direction is negative on `axis`: lane `l` of `neg[axis]`, bit `l` of
+    /// `down[axis]`.
+    neg: [Mask; 3],
     down: [u32; 3],
 }
 
@@ -139,8 +141,45 @@ impl Ray1x8 {
             inv_exit,
             neg_oi_near: near.map(|x: F32x8| -x),
             neg_oi_far: far.map(|x: F32x8| -x),
+            neg: inv.map(|i| lt(i, F32x8::splat(0.0))),
             down: inv.map(|i| bitmask(lt(i, F32x8::splat(0.0)))),
         }
+    }
+
+    /// True when every active lane of `rays` is a forward ray (`tmin >= 0`), the rays this
+    /// prepares.
+    #[inline(always)]
+    pub fn all_forward(rays: &RayPacket) -> bool {
+        let active = bitmask(rays.active);
+        bitmask(ge(rays.tmin, F32x8::splat(0.0))) & active == active
+    }
+
+    /// The lanes that enter child `i` of `n` within `(tmin, tmax)` and their entry distances:
+    /// [`Ray1::test`] of each lane, each in its own octant (a blend picks its planes), so the
+    /// same bits as that lane's single-ray test of the child. The packet walk's test of one
+    /// child for rays of mixed octants (incoherent packets, which have no frustum).
+    #[inline(always)]
+    pub(super) fn test_child(
+        &self,
+        n: &Node8,
+        i: usize,
+        tmin: F32x8,
+        tmax: F32x8,
+    ) -> (Mask, F32x8) {
+        let plane = |k: usize| F32x8::splat(n.bounds[k].as_array()[i]);
+        let (lo, hi) = (|a: usize| plane(LO + a), |a: usize| plane(HI + a));
+        let entry = |_: Plane, a: usize| {
+            let p = select(self.neg[a], hi(a), lo(a));
+            fused_mul_add(p, self.inv[a], self.neg_oi_near[a])
+        };
+        let exit = |_: Plane, a: usize| {
+            let p = select(self.neg[a], lo(a), hi(a));
+            fused_mul_add(p, self.inv_exit[a], self.neg_oi_far[a])
+        };
+        // the planes are the lanes' own (the closures ignore the octant's)
+        let any_octant = Plane::ENTRY_OF_OCTANT[0];
+        let tmax = tmax * F32x8::splat(ROBUST);
+        slab_octant::<true, true>(entry, exit, &any_octant, &any_octant, tmin, tmax)
     }
 
     /// Lane `l` as a forward ray for [`Ray1::test`].
@@ -470,6 +509,51 @@ mod tests {
                     bits(&Ray1::new::<true>(ray)),
                     "case {case}, lane {l}: {ray:?}"
                 );
+            }
+        }
+    }
+
+    /// A packet's test of one child, each lane in its own octant, gives each lane's own
+    /// single-ray test of that child bit for bit (mask and entry distance), for rays of every
+    /// octant mixed in one packet, boxes they start inside, and per-lane `tmin` and `tmax`.
+    #[test]
+    fn a_packet_child_test_is_each_lanes_single_ray_test() {
+        let mut rng = Rng(0x51ed_2701);
+        for case in 0..500 {
+            let boxes: [Aabb; WIDTH] = std::array::from_fn(|_| {
+                let a = Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
+                let b = Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
+                Aabb {
+                    min: a.min(b),
+                    max: a.max(b),
+                }
+            });
+            let n = Node8::new(&boxes.map(|b| (NodeRef::EMPTY, b)));
+            let rays: [Ray; 8] = std::array::from_fn(|l| {
+                let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-6.0, 6.0) as f32));
+                let mut d: [f32; 3] = std::array::from_fn(|_| rng.range64(-1.0, 1.0) as f32);
+                if (case + l) % 6 == 0 {
+                    d[l % 3] = 0.0;
+                }
+                Ray::new(o, Vec3::from_array(d).normalize_or(Vec3::X))
+            });
+            let packet = RayPacket::from_rays(&rays, 0.0);
+            let tmin: [f32; 8] =
+                std::array::from_fn(|_| [0.0, 1e-3, 0.5][rng.range64(0.0, 2.99) as usize]);
+            let tmax: [f32; 8] = std::array::from_fn(|_| rng.range64(0.5, 20.0) as f32);
+            let prepared = Ray1x8::new(&packet);
+            for i in 0..WIDTH {
+                let (mask, near) = prepared.test_child(&n, i, F32x8::new(tmin), F32x8::new(tmax));
+                for (l, ray) in rays.iter().enumerate() {
+                    let (t0, t1) = (F32x8::splat(tmin[l]), F32x8::splat(tmax[l]));
+                    let (m1, n1) = Ray1::new::<true>(ray).test::<true>(&n, t0, t1);
+                    assert_eq!(
+                        crate::simd::bitmask(mask) >> l & 1,
+                        m1 >> i & 1,
+                        "case {case}, child {i}, lane {l}"
+                    );
+                    assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
+                }
             }
         }
     }

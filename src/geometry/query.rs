@@ -21,8 +21,8 @@ use crate::intersect::{
 use crate::math::{Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::simd::{
-    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, ge, gt, lanes, lt,
-    mask_none, select, select_i32,
+    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, gt, lanes, lt, mask_none,
+    select, select_i32,
 };
 
 /// How a group of packets is traced (see [`Geometry::closest_hit_batch`]).
@@ -52,13 +52,6 @@ pub const COHERENT_COS: f32 = 0.9;
 /// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them ray
 /// by ray (torus1m diffuse: single rays 1.3x faster). Measured: PERF.md, "Which path".
 pub const SMALL_TREE_NODES: usize = 1024;
-
-/// True when every active lane of `rays` is a forward ray (`tmin >= 0`), whose walks
-/// [`Ray1x8`] prepares.
-fn forward(rays: &RayPacket) -> bool {
-    let active = bitmask(rays.active);
-    bitmask(ge(rays.tmin, F32x8::splat(0.0))) & active == active
-}
 
 /// The smallest cosine between the active directions of `rays` and their mean (1 when no
 /// lane is active).
@@ -278,7 +271,7 @@ impl Geometry {
             let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
             let tmin = r.tmin.as_array();
             let mut active = bitmask(r.active);
-            let prepared = (forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
+            let prepared = (Ray1x8::all_forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
             while active != 0 {
                 let l = active.trailing_zeros() as usize;
                 active &= active - 1;
