@@ -466,8 +466,14 @@ impl<S: LeafSink> Builder<'_, S> {
         };
         match split {
             Some(s) => {
-                let (axis, boundary, m) = (s.axis, s.boundary, s.mapping);
-                let goes_left = |r: &PrimRef| m.bins(r.centroid2())[axis] < boundary;
+                // `m.bins(c)[axis] < boundary`, the bin's index below the boundary, without
+                // the clamp and the conversion: for a boundary in 1..nb the scaled centroid is
+                // below it exactly when its clamped integer part is (the same decisions, one
+                // axis instead of three)
+                let (axis, m) = (s.axis, s.mapping);
+                debug_assert!((1..m.nb).contains(&s.boundary));
+                let (lo, scale, boundary) = (m.lo[axis], m.scale[axis], s.boundary as f32);
+                let goes_left = |r: &PrimRef| (r.min[axis] + r.max[axis] - lo) * scale < boundary;
                 let (mid, mut l, mut r) = partition_by::<false>(refs, &goes_left, self.ordered);
                 (l.bounds, r.bounds) = (s.left, s.right);
                 (mid, l, r)
