@@ -342,13 +342,28 @@ impl Bins {
     /// Adds every reference on each axis the centroids span, two at a time (independent
     /// updates overlap). An axis where every centroid coincides (scale 0: the sweep skips it)
     /// is not binned: all its references would land in one bin, one dependent update after
-    /// another.
+    /// another. The loop is instantiated for each set of axes, so it does not ask per
+    /// reference which axes to bin.
     #[inline(always)]
     fn add_all(&mut self, refs: &[PrimRef], m: &Mapping) {
-        let live = m.scale.truncate().cmpne(glam::Vec3::ZERO).bitmask();
+        match m.scale.truncate().cmpne(glam::Vec3::ZERO).bitmask() {
+            0b111 => self.add_axes::<0b111>(refs, m),
+            0b101 => self.add_axes::<0b101>(refs, m),
+            0b011 => self.add_axes::<0b011>(refs, m),
+            0b110 => self.add_axes::<0b110>(refs, m),
+            0b001 => self.add_axes::<0b001>(refs, m),
+            0b010 => self.add_axes::<0b010>(refs, m),
+            0b100 => self.add_axes::<0b100>(refs, m),
+            _ => {}
+        }
+    }
+
+    /// [`Bins::add_all`] on the axes of `LIVE` (bit `axis`).
+    #[inline(always)]
+    fn add_axes<const LIVE: u32>(&mut self, refs: &[PrimRef], m: &Mapping) {
         let mut add = |r: &PrimRef, b: [usize; 3]| {
             for (axis, b) in b.into_iter().enumerate() {
-                if live >> axis & 1 == 0 {
+                if LIVE >> axis & 1 == 0 {
                     continue;
                 }
                 // (the mask only tells the compiler the index is in range)
