@@ -13,7 +13,8 @@
 //! primitive bounds + tags --build (binned SAH, 8-wide, parallel)--> Bvh8 { nodes, root }
 //!                                     '--LeafSink::leaf(tag, primitives)--> caller's leaf blocks
 //! traversals (leaf test as a closure):
-//!     single.rs  one ray, all 8 children per pass, nearest first     (incoherent rays)
+//!     single.rs  one ray, all 8 children per pass, nearest first     (incoherent rays;
+//!                [`Ray1x8`] prepares a packet's 8 rays for their walks at once)
 //!     packet.rs  8 rays, child by child, per-lane entry distances     (small coherent groups;
 //!                [`Bvh8::closest_packet_probed`] reports each node to a [`TraversalProbe`],
 //!                the cost heatmap's counter)

@@ -3,6 +3,8 @@
 //! When the packet's rays share an octant, a frustum of them first tests all 8 children in one
 //! pass (interval arithmetic over the packet's origins and reciprocal directions), so only
 //! children some ray may enter get the per-lane test; children go nearest first by that bound.
+//! Without one (rays of mixed octants), forward rays test each child by the single-ray test's
+//! arithmetic, lane by lane in its own octant ([`Ray1x8`]).
 
 use super::single::Ray1x8;
 use super::stack::Stack;

@@ -1,6 +1,9 @@
 //! Single-ray traversal of the 8-wide BVH, for incoherent rays: one 8-lane pass tests all of a
 //! node's children against the ray (box planes chosen by the ray's octant, so no per-axis
 //! min/max), hit children are visited nearest first (closest hit) or in slot order (any hit).
+//! [`Ray1x8`] prepares a packet's 8 rays for their walks at once, and also tests one child
+//! against all 8 lanes by the same arithmetic, each lane in its own octant (the packet walk's
+//! test for incoherent packets, `packet.rs`).
 
 use super::stack::Stack;
 use super::{
@@ -136,13 +139,14 @@ impl Ray1x8 {
         let inv_exit = inv.map(|i| i * F32x8::splat(ROBUST));
         let near = std::array::from_fn(|a| directed_product8(o[a], inv[a]).0);
         let far = std::array::from_fn(|a| directed_product8(o[a], inv_exit[a]).1);
+        let neg = inv.map(|i| lt(i, F32x8::splat(0.0)));
         Ray1x8 {
             inv,
             inv_exit,
             neg_oi_near: near.map(|x: F32x8| -x),
             neg_oi_far: far.map(|x: F32x8| -x),
-            neg: inv.map(|i| lt(i, F32x8::splat(0.0))),
-            down: inv.map(|i| bitmask(lt(i, F32x8::splat(0.0)))),
+            neg,
+            down: neg.map(bitmask),
         }
     }
 

@@ -226,9 +226,9 @@ impl Geometry {
 
     /// The path for a group of packets: a stream when their directions are coherent
     /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and single
-    /// rays in a bigger one. (Single rays with two walks interleaved, the path of the biggest
-    /// trees until the walks took their rays prepared a packet at a time, fell behind one walk
-    /// at a time on torus1m too: PERF.md, sitting 20.)
+    /// rays in a bigger one. (Two walks interleaved, once the path of trees of 16,384 nodes or
+    /// more, fell behind one walk at a time on torus1m when single rays came to be prepared a
+    /// packet at a time, and were removed: PERF.md, sitting 20.)
     pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
         let nodes = self.bvh.nodes.len();
         if coherence(rays) >= COHERENT_COS {
