@@ -1,9 +1,9 @@
 //! Claim: the 8-wide BVH and its leaf blocks hold their invariants (`validate_bvh`) for every
 //! builder setting and on the edge cases (one primitive, every primitive at one point, flat
 //! scenes, more primitives than a leaf may hold at one point), leaf blocks with partly filled
-//! lanes report only their own primitives, and every path through the tree (single rays,
-//! 8-ray packets, streams of packets, the per-group choice) gives the
-//! same `(t, primitive)` bit for bit on the same rays, ties in `t` included.
+//! lanes report only their own primitives, and every path through the tree (single rays, 8-ray
+//! packets, streams of packets, the per-group choice) gives the same `(t, primitive)` bit for
+//! bit on the same rays, ties in `t` included.
 
 mod common;
 

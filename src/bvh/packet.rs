@@ -340,7 +340,8 @@ impl Bvh8 {
             // single-ray test's fused arithmetic, lane by lane in its own octant: 4 operations
             // an axis instead of 6, and no widening after the minimum (PERF.md, sitting 20)
             None if Ray1x8::all_forward(rays) => {
-                let r = Ray1x8::new(rays);
+                let (o, i) = (p.org, p.inv);
+                let r = Ray1x8::from_inverse([o.x, o.y, o.z], [i.x, i.y, i.z]);
                 let test = |n: &Node8, i, tmax| r.test_child(n, i, tmin, tmax);
                 self.packet_walk(rays, tmax, root, None, &test, &mut leaf, probe);
             }

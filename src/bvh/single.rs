@@ -134,8 +134,14 @@ impl Ray1x8 {
     /// Every lane of `rays` prepared, active or not (the walks take only active ones).
     #[inline(always)]
     pub fn new(rays: &RayPacket) -> Ray1x8 {
-        let o = [rays.origin.x, rays.origin.y, rays.origin.z];
         let inv = [rays.dir.x, rays.dir.y, rays.dir.z].map(safe_inverse8);
+        Ray1x8::from_inverse([rays.origin.x, rays.origin.y, rays.origin.z], inv)
+    }
+
+    /// [`Ray1x8::new`] from the origins and the safe reciprocal directions
+    /// ([`super::safe_inverse8`]) a packet walk has already computed.
+    #[inline(always)]
+    pub(super) fn from_inverse(o: [F32x8; 3], inv: [F32x8; 3]) -> Ray1x8 {
         let inv_exit = inv.map(|i| i * F32x8::splat(ROBUST));
         let near = std::array::from_fn(|a| directed_product8(o[a], inv[a]).0);
         let far = std::array::from_fn(|a| directed_product8(o[a], inv_exit[a]).1);
