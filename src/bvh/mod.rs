@@ -32,7 +32,7 @@ mod stream;
 mod test_rng;
 
 pub use packet::PACKET_STACK_DEPTH;
-pub use single::Ray1x8;
+pub use single::{Entered, Ray1x8};
 pub use stream::{MAX_STREAM, StreamMasks};
 
 use crate::math::Vec3;

@@ -3,7 +3,8 @@
 //! min/max), hit children are visited nearest first (closest hit) or in slot order (any hit).
 //! [`Ray1x8`] prepares a packet's 8 rays for their walks at once, and also tests one child
 //! against all 8 lanes by the same arithmetic, each lane in its own octant (the packet walk's
-//! test for incoherent packets, `packet.rs`).
+//! test for incoherent packets, `packet.rs`), or a whole node: the root, whose test is the
+//! first step of every lane's walk ([`Entered`]).
 
 use super::stack::Stack;
 use super::{
@@ -192,6 +193,25 @@ impl Ray1x8 {
         slab_octant::<true, true>(entry, exit, &any_octant, &any_octant, tmin, tmax)
     }
 
+    /// Which children of `n` each lane enters within `(tmin, tmax)`, and where: every child
+    /// tested against all 8 lanes by [`Ray1x8::test_child`], so each lane's the same bits as
+    /// its own single-ray test of `n` ([`Ray1::test`]). The first step of the packet's walks,
+    /// taken for the 8 lanes at once ([`Bvh8::enter_root`]).
+    #[inline(always)]
+    fn test_node(&self, n: &Node8, tmin: F32x8, tmax: F32x8) -> Entered {
+        let mut by_child = 0u64;
+        let mut near = [[0.0f32; 8]; WIDTH];
+        for (i, near) in near.iter_mut().enumerate() {
+            let (m, d) = self.test_child(n, i, tmin, tmax);
+            by_child |= (bitmask(m) as u64) << (8 * i);
+            *near = d.to_array();
+        }
+        Entered {
+            by_lane: transpose_bits8x8(by_child),
+            near,
+        }
+    }
+
     /// Lane `l` as a forward ray for [`Ray1::test`].
     #[inline(always)]
     fn lane(&self, l: usize) -> Ray1 {
@@ -207,6 +227,27 @@ impl Ray1x8 {
             far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
     }
+}
+
+/// The children of one node that each lane of a packet enters (`Ray1x8::test_node`, made by
+/// [`Bvh8::enter_root`]): byte `l` of `by_lane` holds lane `l`'s mask (bit `i` = child `i`),
+/// `near[i][l]` its entry distance into child `i`.
+pub struct Entered {
+    by_lane: u64,
+    near: [[f32; 8]; WIDTH],
+}
+
+/// The transpose of an 8x8 bit matrix held row by row in the bytes of a `u64` (bit `c` of
+/// byte `r` goes to bit `r` of byte `c`): three exchanges of blocks across the diagonal (Hacker's
+/// Delight, 7-3).
+#[inline(always)]
+fn transpose_bits8x8(mut x: u64) -> u64 {
+    let mut t = (x ^ (x >> 7)) & 0x00AA_00AA_00AA_00AA;
+    x ^= t ^ (t << 7);
+    t = (x ^ (x >> 14)) & 0x0000_CCCC_0000_CCCC;
+    x ^= t ^ (t << 14);
+    t = (x ^ (x >> 28)) & 0x0000_0000_F0F0_F0F0;
+    x ^ t ^ (t << 28)
 }
 
 /// [`directed_product`] of one axis for 8 lanes (the same operations, so the same bits).
@@ -258,12 +299,24 @@ impl Bvh8 {
         }
     }
 
+    /// The root's children each lane of `rays` enters within `(tmin, tmax)` (the lanes' own
+    /// limits, `tmin >= 0`), tested for the 8 lanes at once; `None` when the root is a leaf or
+    /// the tree is empty. [`Bvh8::closest_lane`] starts a lane's walk from it.
+    #[inline(always)]
+    pub fn enter_root(&self, rays: &Ray1x8, tmin: F32x8, tmax: F32x8) -> Option<Entered> {
+        (!self.root.is_leaf()).then(|| rays.test_node(&self.nodes[self.root.index()], tmin, tmax))
+    }
+
     /// [`Bvh8::closest`] for lane `l` of a packet prepared by [`Ray1x8::new`], whose `tmin`
-    /// must be at least 0 (a forward ray): the same walk, without preparing the ray again.
+    /// must be at least 0 (a forward ray): the same walk, without preparing the ray again. With
+    /// `root`, the packet's test of the root ([`Bvh8::enter_root`], made with this lane's
+    /// `tmin` and `tmax`), the walk starts at its second step.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     pub fn closest_lane(
         &self,
         rays: &Ray1x8,
+        root: Option<&Entered>,
         l: usize,
         tmin: f32,
         tmax: &mut f32,
@@ -271,7 +324,15 @@ impl Bvh8 {
         touch: impl Fn(Leaf),
     ) {
         debug_assert!(tmin >= 0.0);
-        self.closest_from::<true>(&rays.lane(l), tmin, tmax, leaf, &touch);
+        let start = |stack: &mut Stack<(NodeRef, f32), STACK>| match root {
+            Some(e) => {
+                let mask = (e.by_lane >> (8 * l)) as u32 & 0xff;
+                let n = &self.nodes[self.root.index()];
+                self.enter(n, mask, |c| e.near[c][l], stack, &touch)
+            }
+            None => Some(self.root),
+        };
+        self.closest_from::<true>(&rays.lane(l), tmin, tmax, leaf, &touch, start);
     }
 
     /// [`Bvh8::closest`], `FORWARD` when `tmin >= 0` ([`super::widen_exit`]).
@@ -284,10 +345,12 @@ impl Bvh8 {
         leaf: impl FnMut(Leaf, &mut f32),
         touch: &impl Fn(Leaf),
     ) {
-        self.closest_from::<FORWARD>(&Ray1::new::<FORWARD>(ray), tmin, tmax, leaf, touch);
+        let r = Ray1::new::<FORWARD>(ray);
+        self.closest_from::<FORWARD>(&r, tmin, tmax, leaf, touch, |_| Some(self.root));
     }
 
-    /// The walk of [`Bvh8::closest`] for a prepared ray.
+    /// The walk of [`Bvh8::closest`] for a prepared ray, from where `start` puts it (the root,
+    /// or the nearest child of a root already tested, the others pushed; `None`: nowhere).
     #[inline(always)]
     fn closest_from<const FORWARD: bool>(
         &self,
@@ -296,13 +359,16 @@ impl Bvh8 {
         tmax: &mut f32,
         mut leaf: impl FnMut(Leaf, &mut f32),
         touch: &impl Fn(Leaf),
+        start: impl FnOnce(&mut Stack<(NodeRef, f32), STACK>) -> Option<NodeRef>,
     ) {
         if self.root.is_empty() {
             return;
         }
         let tmin8 = F32x8::splat(tmin);
         let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
-        let mut cur = self.root;
+        let Some(mut cur) = start(&mut stack) else {
+            return;
+        };
         loop {
             let next = if cur.is_leaf() {
                 leaf(cur.as_leaf(), tmax);
@@ -335,6 +401,21 @@ impl Bvh8 {
         touch: &impl Fn(Leaf),
     ) -> Option<NodeRef> {
         let (mask, near) = r.test::<FORWARD>(n, tmin8, F32x8::splat(tmax));
+        let near = near.to_array();
+        self.enter(n, mask, |c| near[c], stack, touch)
+    }
+
+    /// The step of [`Bvh8::descend`] after the test: of the children in `mask` (entry
+    /// distances `near(child)`), the nearest, the others pushed farthest first.
+    #[inline(always)]
+    fn enter(
+        &self,
+        n: &Node8,
+        mask: u32,
+        near: impl Fn(usize) -> f32,
+        stack: &mut Stack<(NodeRef, f32), STACK>,
+        touch: &impl Fn(Leaf),
+    ) -> Option<NodeRef> {
         if mask == 0 {
             return None;
         }
@@ -343,12 +424,11 @@ impl Bvh8 {
         if rest == 0 {
             return Some(n.child[c0]);
         }
-        let near = near.to_array();
         let c1 = rest.trailing_zeros() as usize;
         let rest = rest & (rest - 1);
         if rest == 0 {
             // two: the farther waits on the stack
-            let (a, b) = ((n.child[c0], near[c0]), (n.child[c1], near[c1]));
+            let (a, b) = ((n.child[c0], near(c0)), (n.child[c1], near(c1)));
             let (first, second) = if a.1 <= b.1 { (a, b) } else { (b, a) };
             self.prefetch(second.0, touch);
             stack.push(second);
@@ -356,14 +436,14 @@ impl Bvh8 {
         }
         // three or more: sort them farthest first, push all but the nearest
         let mut hits = [(NodeRef::EMPTY, 0.0f32); WIDTH];
-        hits[0] = (n.child[c0], near[c0]);
-        hits[1] = (n.child[c1], near[c1]);
+        hits[0] = (n.child[c0], near(c0));
+        hits[1] = (n.child[c1], near(c1));
         let mut count = 2;
         let mut m = rest;
         while m != 0 {
             let j = m.trailing_zeros() as usize;
             m &= m - 1;
-            hits[count] = (n.child[j], near[j]);
+            hits[count] = (n.child[j], near(j));
             count += 1;
         }
         sort_farthest_first(&mut hits[..count]);
@@ -525,7 +605,8 @@ mod tests {
 
     /// A packet's test of one child, each lane in its own octant, gives each lane's own
     /// single-ray test of that child bit for bit (mask and entry distance), for rays of every
-    /// octant mixed in one packet, boxes they start inside, and per-lane `tmin` and `tmax`.
+    /// octant mixed in one packet, boxes they start inside, and per-lane `tmin` and `tmax`; so
+    /// does its test of a whole node (the first step of the lanes' walks).
     #[test]
     fn a_packet_child_test_is_each_lanes_single_ray_test() {
         let mut rng = Rng(0x51ed_2701);
@@ -552,8 +633,10 @@ mod tests {
                 std::array::from_fn(|_| [0.0, 1e-3, 0.5][rng.range64(0.0, 2.99) as usize]);
             let tmax: [f32; 8] = std::array::from_fn(|_| rng.range64(0.5, 20.0) as f32);
             let prepared = Ray1x8::new(&packet);
+            let (t0, t1) = (F32x8::new(tmin), F32x8::new(tmax));
+            let node = prepared.test_node(&n, t0, t1);
             for i in 0..WIDTH {
-                let (mask, near) = prepared.test_child(&n, i, F32x8::new(tmin), F32x8::new(tmax));
+                let (mask, near) = prepared.test_child(&n, i, t0, t1);
                 for (l, ray) in rays.iter().enumerate() {
                     let (t0, t1) = (F32x8::splat(tmin[l]), F32x8::splat(tmax[l]));
                     let (m1, n1) = Ray1::new::<true>(ray).test::<true>(&n, t0, t1);
@@ -563,8 +646,34 @@ mod tests {
                         "case {case}, child {i}, lane {l}"
                     );
                     assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
+                    // the whole node at once: lane l's byte and its row of distances
+                    assert_eq!((node.by_lane >> (8 * l)) as u32 & 0xff, m1, "case {case}");
+                    assert_eq!(node.near[i][l].to_bits(), n1.to_array()[i].to_bits());
                 }
             }
+        }
+    }
+
+    /// The 8x8 bit transpose moves bit `c` of byte `r` to bit `r` of byte `c`, for single bits
+    /// and for random matrices.
+    #[test]
+    fn the_bit_transpose_moves_each_bit_across_the_diagonal() {
+        let naive = |x: u64| {
+            let mut y = 0u64;
+            for r in 0..8 {
+                for c in 0..8 {
+                    y |= (x >> (8 * r + c) & 1) << (8 * c + r);
+                }
+            }
+            y
+        };
+        for b in 0..64 {
+            assert_eq!(super::transpose_bits8x8(1 << b), naive(1 << b), "bit {b}");
+        }
+        let mut rng = Rng(0x7f4a_7c15);
+        for _ in 0..1000 {
+            let x = u64::from(rng.next()) << 32 | u64::from(rng.next());
+            assert_eq!(super::transpose_bits8x8(x), naive(x));
         }
     }
 

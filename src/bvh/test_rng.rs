@@ -6,7 +6,8 @@ use crate::math::Vec3;
 pub(super) struct Rng(pub u32);
 
 impl Rng {
-    fn next(&mut self) -> u32 {
+    /// 32 random bits.
+    pub fn next(&mut self) -> u32 {
         self.0 ^= self.0 << 13;
         self.0 ^= self.0 >> 17;
         self.0 ^= self.0 << 5;

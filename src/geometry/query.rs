@@ -11,7 +11,7 @@
 
 use super::blocks::Best;
 use super::{Geometry, PrimKind};
-use crate::bvh::{MAX_STREAM, Ray1x8};
+use crate::bvh::{Entered, MAX_STREAM, Ray1x8};
 use crate::intersect::sphere::affine_packet;
 use crate::intersect::sphere::sphere_lanes;
 use crate::intersect::{
@@ -136,10 +136,18 @@ impl Geometry {
     /// [`Geometry::closest_bvh`] for lane `l` of a packet prepared by [`Ray1x8::new`] (`ray`
     /// is that lane, its `tmin` at least 0).
     #[inline(always)]
-    fn closest_bvh_lane(&self, rays: &Ray1x8, l: usize, ray: &Ray, tmin: f32, best: &mut Best) {
+    fn closest_bvh_lane(
+        &self,
+        (rays, root): &(Ray1x8, Option<Entered>),
+        l: usize,
+        ray: &Ray,
+        tmin: f32,
+        best: &mut Best,
+    ) {
         let mut limit = best.t;
         self.bvh.closest_lane(
             rays,
+            root.as_ref(),
             l,
             tmin,
             &mut limit,
@@ -265,13 +273,19 @@ impl Geometry {
     /// answers as [`Geometry::closest_hit`]. Each packet's lanes are walked in place (gathering
     /// a group's rays into arrays and scattering their hits back cost 5% of torus100k's diffuse
     /// instructions; PERF.md, sitting 19), forward rays (every `tmin >= 0`, all but an
-    /// orthographic camera's) prepared for their walks all 8 at once ([`Ray1x8`]).
+    /// orthographic camera's) prepared for their walks all 8 at once ([`Ray1x8`]), and the root
+    /// tested for all 8 at once too ([`crate::bvh::Bvh8::enter_root`]): the first step of
+    /// every lane's walk.
     fn closest_hit_singles(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
         for (r, h) in rays.iter().zip(hits.iter_mut()) {
             let (mut t, mut prim) = (lanes(h.t), crate::simd::lanes_i32(h.prim));
             let tmin = r.tmin.as_array();
             let mut active = bitmask(r.active);
-            let prepared = (Ray1x8::all_forward(r) && !self.bvh.is_empty()).then(|| Ray1x8::new(r));
+            let prepared = (Ray1x8::all_forward(r) && !self.bvh.is_empty()).then(|| {
+                let p = Ray1x8::new(r);
+                let root = self.bvh.enter_root(&p, r.tmin, h.t);
+                (p, root)
+            });
             while active != 0 {
                 let l = active.trailing_zeros() as usize;
                 active &= active - 1;
