@@ -435,23 +435,25 @@ impl Bvh8 {
             return Some(first.0);
         }
         // three or more: sort them farthest first, push all but the nearest
-        let mut hits = [(NodeRef::EMPTY, 0.0f32); WIDTH];
-        hits[0] = (n.child[c0], near(c0));
-        hits[1] = (n.child[c1], near(c1));
+        let mut keys = [0u64; WIDTH];
+        keys[0] = sort_key(near(c0), c0);
+        keys[1] = sort_key(near(c1), c1);
         let mut count = 2;
         let mut m = rest;
         while m != 0 {
             let j = m.trailing_zeros() as usize;
             m &= m - 1;
-            hits[count] = (n.child[j], near(j));
+            keys[count] = sort_key(near(j), j);
             count += 1;
         }
-        sort_farthest_first(&mut hits[..count]);
-        for h in &hits[..count - 1] {
+        sort_keys_descending(&mut keys[..count]);
+        for &k in &keys[..count - 1] {
+            let c = (k & 7) as usize;
+            let h = (n.child[c], near(c));
             self.prefetch(h.0, touch);
-            stack.push(*h);
+            stack.push(h);
         }
-        Some(hits[count - 1].0)
+        Some(n.child[(keys[count - 1] & 7) as usize])
     }
 
     /// Single-ray any hit: true as soon as `leaf(leaf)` reports a blocker before `tmax`.
@@ -526,18 +528,49 @@ fn pop_nearer(stack: &mut Stack<(NodeRef, f32), STACK>, tmax: f32) -> Option<Nod
     }
 }
 
-/// Insertion sort of a few stack entries by entry distance, largest first (ties keep slot
-/// order reversed, so the lower slot ends on top).
+/// A child's place in its walk's order: its entry distance's bits mapped to integers of the
+/// same order (negative distances too), then its slot, so that of equal distances the lower
+/// slot counts as nearer.
 #[inline(always)]
-fn sort_farthest_first(s: &mut [(NodeRef, f32)]) {
-    for i in 1..s.len() {
-        let x = s[i];
-        let mut j = i;
-        while j > 0 && s[j - 1].1 <= x.1 {
-            s[j] = s[j - 1];
-            j -= 1;
+fn sort_key(near: f32, slot: usize) -> u64 {
+    let b = near.to_bits();
+    let ordered = b ^ ((b as i32 >> 31) as u32 | 0x8000_0000);
+    u64::from(ordered) << 32 | slot as u64
+}
+
+/// Sorts a few keys largest first: three or four by a network of compare-exchanges (no
+/// branch on the data), more by insertion.
+#[inline(always)]
+fn sort_keys_descending(k: &mut [u64]) {
+    #[inline(always)]
+    fn exchange(k: &mut [u64], i: usize, j: usize) {
+        let (a, b) = (k[i], k[j]);
+        (k[i], k[j]) = (a.max(b), a.min(b));
+    }
+    match k.len() {
+        3 => {
+            exchange(k, 0, 1);
+            exchange(k, 1, 2);
+            exchange(k, 0, 1);
         }
-        s[j] = x;
+        4 => {
+            exchange(k, 0, 1);
+            exchange(k, 2, 3);
+            exchange(k, 0, 2);
+            exchange(k, 1, 3);
+            exchange(k, 1, 2);
+        }
+        _ => {
+            for i in 1..k.len() {
+                let x = k[i];
+                let mut j = i;
+                while j > 0 && k[j - 1] < x {
+                    k[j] = k[j - 1];
+                    j -= 1;
+                }
+                k[j] = x;
+            }
+        }
     }
 }
 
@@ -651,6 +684,53 @@ mod tests {
                     assert_eq!(node.near[i][l].to_bits(), n1.to_array()[i].to_bits());
                 }
             }
+        }
+    }
+
+    /// Children come out of the walk's sort farthest first, of equal distances the higher slot
+    /// first (the lower is visited first): distances of both signs, zeros, infinities and
+    /// ties, every count of entered children.
+    #[test]
+    fn entered_children_sort_farthest_first_ties_by_slot() {
+        let mut rng = Rng(0x3c6e_f372);
+        let values = [
+            -1e30,
+            -2.5,
+            -1.0,
+            -0.0,
+            0.0,
+            1e-40,
+            0.5,
+            1.0,
+            7.0,
+            1e30,
+            f32::INFINITY,
+        ];
+        for case in 0..5000 {
+            let count = 1 + case % 8;
+            let mut slots: Vec<usize> = (0..8).collect();
+            // a random subset of the slots, in slot order (as the walk gathers them)
+            for i in (1..8).rev() {
+                slots.swap(i, rng.next() as usize % (i + 1));
+            }
+            let mut slots = slots[..count].to_vec();
+            slots.sort();
+            let near: Vec<f32> = slots
+                .iter()
+                .map(|_| values[rng.next() as usize % values.len()])
+                .collect();
+            let mut keys: Vec<u64> = slots
+                .iter()
+                .zip(&near)
+                .map(|(&c, &d)| super::sort_key(d, c))
+                .collect();
+            super::sort_keys_descending(&mut keys);
+            let got: Vec<usize> = keys.iter().map(|k| (k & 7) as usize).collect();
+            let mut want: Vec<(f32, usize)> = near.iter().copied().zip(slots.clone()).collect();
+            // farthest first; ties (-0 and 0 apart) by slot, the higher first
+            want.sort_by(|a, b| b.0.total_cmp(&a.0).then(b.1.cmp(&a.1)));
+            let want: Vec<usize> = want.iter().map(|w| w.1).collect();
+            assert_eq!(got, want, "case {case}: {near:?} at {slots:?}");
         }
     }
 
