@@ -31,8 +31,16 @@ pub const MAX_BINS: usize = 32;
 /// Subtrees over more primitives than this are built in parallel.
 const PARALLEL_SUBTREE: usize = 4096;
 
-/// Nodes over more primitives than this bin and partition in parallel chunks of this size.
+/// Nodes over more primitives than this bin and partition in parallel chunks of this size (and
+/// the references are made and first bounded so); on one thread, the size of every pass's chunks.
 const PARALLEL_PASS: usize = 1 << 16;
+
+/// With more than one thread, nodes bin and partition in chunks of this size: the top node of
+/// a mesh of tens of thousands of triangles (the course's 40k bunny) is then shared out too,
+/// not only the subtrees below it. One thread keeps [`PARALLEL_PASS`]: these chunks cost it
+/// 2–4% of a torus build (the partition's swaps across the chunks; PERF.md, sitting 21). The
+/// tree is the same either way, as binning and partitioning are by value.
+const PARALLEL_PASS_SHARED: usize = 1 << 12;
 
 /// Where the builder puts leaves: the caller turns a group of primitives into its leaf storage.
 pub trait LeafSink: Sync {
@@ -239,6 +247,11 @@ pub fn build(
         nodes: Arena::with_capacity(n),
         sink,
         ordered: in_spatial_order(&refs, &rec),
+        pass: if rayon::current_num_threads() > 1 {
+            PARALLEL_PASS_SHARED
+        } else {
+            PARALLEL_PASS
+        },
     };
     let root = builder.subtree(&mut refs, rec, 1, &mut Bins::new());
     Bvh8 {
@@ -275,6 +288,9 @@ struct Builder<'s, S: LeafSink> {
     sink: &'s S,
     /// The references came in spatial order ([`in_spatial_order`]): partitions may branch.
     ordered: bool,
+    /// Nodes over more references than this bin and partition in parallel chunks of this size
+    /// ([`PARALLEL_PASS`] on one thread, [`PARALLEL_PASS_SHARED`] on more).
+    pass: usize,
 }
 
 /// A split: the axis and bin boundary (everything in a lower bin goes left), the children's
@@ -408,9 +424,9 @@ impl<S: LeafSink> Builder<'_, S> {
             return None;
         }
         let nb = m.nb;
-        if refs.len() > PARALLEL_PASS {
+        if refs.len() > self.pass {
             *bins = refs
-                .par_chunks(PARALLEL_PASS)
+                .par_chunks(self.pass)
                 .map(|chunk| {
                     let mut b = Bins::new();
                     b.add_all(chunk, &m);
@@ -492,13 +508,14 @@ impl<S: LeafSink> Builder<'_, S> {
                 let goes_left = |r: &PrimRef| {
                     ((r.centroid2() - m.lo) * m.scale).cmplt(boundary).bitmask() >> axis & 1 == 1
                 };
-                let (mid, mut l, mut r) = partition_by::<false>(refs, &goes_left, self.ordered);
+                let (mid, mut l, mut r) =
+                    partition_by::<false>(refs, &goes_left, self.ordered, self.pass);
                 (l.bounds, r.bounds) = (s.left, s.right);
                 (mid, l, r)
             }
             None if rec.tags.count_ones() > 1 => {
                 let tag = rec.tags.trailing_zeros();
-                partition_by::<true>(refs, &|r: &PrimRef| r.tag() == tag, self.ordered)
+                partition_by::<true>(refs, &|r: &PrimRef| r.tag() == tag, self.ordered, self.pass)
             }
             None => {
                 // Every centroid coincides: halves, in index order so the tree is the same
@@ -663,18 +680,20 @@ impl<S: LeafSink> Builder<'_, S> {
 }
 
 /// Partitions `refs` so those `goes_left` come first; returns the split position and the two
-/// sides' records (gathered on the way; their bounds only if `BOUNDS`). Big ranges partition in
-/// parallel chunks, then swap the misplaced references across the split position.
+/// sides' records (gathered on the way; their bounds only if `BOUNDS`). Ranges over `pass`
+/// references partition in parallel chunks of `pass`, then swap the misplaced references across
+/// the split position.
 fn partition_by<const BOUNDS: bool>(
     refs: &mut [PrimRef],
     goes_left: &(impl Fn(&PrimRef) -> bool + Sync),
     ordered: bool,
+    pass: usize,
 ) -> (usize, Record, Record) {
-    if refs.len() <= PARALLEL_PASS {
+    if refs.len() <= pass {
         return partition_serial::<BOUNDS>(refs, goes_left, ordered);
     }
     let parts: Vec<(usize, Record, Record)> = refs
-        .par_chunks_mut(PARALLEL_PASS)
+        .par_chunks_mut(pass)
         .map(|c| partition_serial::<BOUNDS>(c, goes_left, ordered))
         .collect();
     let mid: usize = parts.iter().map(|p| p.0).sum();
@@ -685,8 +704,8 @@ fn partition_by<const BOUNDS: bool>(
     for (k, p) in parts.iter().enumerate() {
         l = l.merge(&p.1);
         r = r.merge(&p.2);
-        let start = k * PARALLEL_PASS;
-        let end = (start + PARALLEL_PASS).min(refs.len());
+        let start = k * pass;
+        let end = (start + pass).min(refs.len());
         let split = start + p.0;
         if split < mid {
             wrong_right.push(split..end.min(mid));
@@ -939,6 +958,72 @@ mod tests {
             })
             .collect();
         assert_eq!(trees[0], trees[1]);
+    }
+
+    /// A tree as text, from the root down: every node's planes as bits, every leaf's primitives
+    /// (as the sink recorded them); independent of the order nodes and leaves were stored in.
+    fn tree_text(bvh: &Bvh8, leaves: &[Vec<u32>], r: NodeRef, out: &mut String) {
+        use std::fmt::Write;
+        if r.is_leaf() {
+            let _ = write!(out, "leaf{:?} ", leaves[r.as_leaf().first as usize]);
+            return;
+        }
+        let n = &bvh.nodes[r.index()];
+        let bits: Vec<u32> = n
+            .bounds
+            .iter()
+            .flat_map(|b| b.to_array().map(f32::to_bits))
+            .collect();
+        let _ = write!(out, "node{bits:?}( ");
+        for c in n.child.iter().filter(|c| !c.is_empty()) {
+            tree_text(bvh, leaves, *c, out);
+        }
+        out.push_str(") ");
+    }
+
+    /// Two threads bin and partition the big nodes in smaller chunks than one
+    /// ([`PARALLEL_PASS_SHARED`]), and build the same tree: every plane, every leaf, bit for
+    /// bit, over 20,000 boxes in order and shuffled (the two partition schemes), and over
+    /// 70,000 (past [`PARALLEL_PASS`] too).
+    #[test]
+    fn the_tree_is_the_same_on_one_thread_and_on_two() {
+        for (n, shuffled) in [(20_000, false), (20_000, true), (70_000, true)] {
+            let mut rng = super::super::test_rng::Rng(0x2545_f491);
+            let boxes: Vec<Aabb> = line_of_refs(n, shuffled)
+                .iter()
+                .map(|r| {
+                    // scattered in all three axes, of several sizes
+                    let x = r.min.x;
+                    let p = glam::Vec3::new(x, rng.range(0.0, 300.0), rng.range(0.0, 300.0));
+                    Aabb {
+                        min: p,
+                        max: p + glam::Vec3::splat(rng.range(0.1, 20.0)),
+                    }
+                })
+                .collect();
+            let tree = |threads: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let sink = RecordingSink::default();
+                let bvh =
+                    pool.install(|| build(n, |i| (boxes[i], 0), &BuildSettings::default(), &sink));
+                let mut text = String::new();
+                tree_text(&bvh, &sink.leaves(), bvh.root, &mut text);
+                text
+            };
+            let one = tree(1);
+            assert!(
+                one.len() > 100 * n / 4,
+                "{n}: a tree of {} characters",
+                one.len()
+            );
+            assert!(
+                tree(2) == one,
+                "{n} boxes, shuffled {shuffled}: 2 threads built another tree"
+            );
+        }
     }
 
     #[test]
