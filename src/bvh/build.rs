@@ -69,8 +69,8 @@ impl Default for BuildSettings {
         BuildSettings {
             block: 4,
             min_leaf: 4,
-            max_leaf: 8,
-            traversal_cost: 1.0,
+            max_leaf: 12,
+            traversal_cost: 2.0,
             max_bins: MAX_BINS,
         }
     }
@@ -1014,10 +1014,11 @@ mod tests {
                 text
             };
             let one = tree(1);
+            let leaves = one.matches("leaf").count();
+            let max_leaf = BuildSettings::default().max_leaf;
             assert!(
-                one.len() > 100 * n / 4,
-                "{n}: a tree of {} characters",
-                one.len()
+                leaves >= n / max_leaf,
+                "{n} boxes: a tree of {leaves} leaves"
             );
             assert!(
                 tree(2) == one,
