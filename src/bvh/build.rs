@@ -534,6 +534,15 @@ impl<S: LeafSink> Builder<'_, S> {
         if single && (n <= self.settings.min_leaf || depth > MAX_DEPTH || n == 1) {
             return self.leaf(refs);
         }
+        // A leaf that costs no more than a node's traversal alone beats every split (whose
+        // cost adds its children's, at least 0, to that traversal): the leaf the comparison
+        // below would make, without binning for it first.
+        if single
+            && n <= self.settings.max_leaf
+            && self.blocks(n as u32) <= self.settings.traversal_cost
+        {
+            return self.leaf(refs);
+        }
         // at the depth limit only kinds are separated
         let split = if depth >= MAX_DEPTH {
             None
