@@ -41,8 +41,8 @@ pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 
 /// The most primitives a leaf holds in a tree with spheres (the builder's default, 12, is for
 /// triangles). Sphere leaves are mostly tested a packet of rays at a time, where leaves of 12
-/// cost more than the nodes they save: spheres64 primary rays 146 -> 114 Mrays/s, spheres4096
-/// 124 -> 116 (PERF.md, sitting 21).
+/// cost more than the nodes they save: with leaves of 12, spheres64 primary rays fell from 143
+/// to 112 Mrays/s, spheres4096 from 120 to 111 (PERF.md, sitting 21).
 pub const SPHERE_MAX_LEAF: usize = 8;
 
 /// The kinds of primitive, in geometry-index order.
