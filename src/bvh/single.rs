@@ -237,6 +237,14 @@ pub struct Entered {
     near: [[f32; 8]; WIDTH],
 }
 
+impl Entered {
+    /// Lane `l`'s children (bit `i` = child `i`).
+    #[inline(always)]
+    fn mask(&self, l: usize) -> u32 {
+        (self.by_lane >> (8 * l)) as u32 & 0xff
+    }
+}
+
 /// The transpose of an 8x8 bit matrix held row by row in the bytes of a `u64` (bit `c` of
 /// byte `r` goes to bit `r` of byte `c`): three exchanges of blocks across the diagonal (Hacker's
 /// Delight, 7-3).
@@ -326,9 +334,8 @@ impl Bvh8 {
         debug_assert!(tmin >= 0.0);
         let start = |stack: &mut Stack<(NodeRef, f32), STACK>| match root {
             Some(e) => {
-                let mask = (e.by_lane >> (8 * l)) as u32 & 0xff;
                 let n = &self.nodes[self.root.index()];
-                self.enter(n, mask, |c| e.near[c][l], stack, &touch)
+                self.enter(n, e.mask(l), |c| e.near[c][l], stack, &touch)
             }
             None => Some(self.root),
         };
@@ -680,7 +687,7 @@ mod tests {
                     );
                     assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
                     // the whole node at once: lane l's byte and its row of distances
-                    assert_eq!((node.by_lane >> (8 * l)) as u32 & 0xff, m1, "case {case}");
+                    assert_eq!(node.mask(l), m1, "case {case}");
                     assert_eq!(node.near[i][l].to_bits(), n1.to_array()[i].to_bits());
                 }
             }
