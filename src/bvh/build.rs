@@ -35,11 +35,12 @@ const PARALLEL_SUBTREE: usize = 4096;
 /// the references are made and first bounded so); on one thread, the size of every pass's chunks.
 const PARALLEL_PASS: usize = 1 << 16;
 
-/// With more than one thread, nodes bin and partition in chunks of this size: the top node of
-/// a mesh of tens of thousands of triangles (the course's 40k bunny) is then shared out too,
-/// not only the subtrees below it. One thread keeps [`PARALLEL_PASS`]: these chunks cost it
-/// 2–4% of a torus build (the partition's swaps across the chunks; PERF.md, sitting 21). The
-/// tree is the same either way, as binning and partitioning are by value.
+/// With more than one thread, the references are made and first bounded, and nodes bin and
+/// partition, in chunks of this size: the top node of a mesh of tens of thousands of triangles
+/// (the course's 40k bunny) is then shared out too, not only the subtrees below it. One thread
+/// keeps [`PARALLEL_PASS`]: these chunks cost it 2–4% of a torus build (the partition's swaps
+/// across the chunks; PERF.md, sitting 21). The tree is the same either way, as binning and
+/// partitioning are by value.
 const PARALLEL_PASS_SHARED: usize = 1 << 12;
 
 /// Where the builder puts leaves: the caller turns a group of primitives into its leaf storage.
@@ -192,11 +193,13 @@ impl Record {
         self
     }
 
-    fn of(refs: &[PrimRef]) -> Record {
-        if refs.len() > PARALLEL_PASS {
+    /// The record of `refs`, over more than `pass` of them in parallel chunks of `pass` (the
+    /// same record either way: bounds and tags do not depend on the order they are met in).
+    fn of(refs: &[PrimRef], pass: usize) -> Record {
+        if refs.len() > pass {
             return refs
-                .par_chunks(PARALLEL_PASS)
-                .map(Record::of)
+                .par_chunks(pass)
+                .map(|c| Record::of(c, pass))
                 .reduce(|| Record::EMPTY, |a, b| a.merge(&b));
         }
         let mut r = Record::EMPTY;
@@ -227,7 +230,12 @@ pub fn build(
             max: b.max.extend(f32::from_bits(tag as u32)),
         }
     };
-    let mut refs: Vec<PrimRef> = if n > PARALLEL_PASS {
+    let pass = if rayon::current_num_threads() > 1 {
+        PARALLEL_PASS_SHARED
+    } else {
+        PARALLEL_PASS
+    };
+    let mut refs: Vec<PrimRef> = if n > pass {
         (0..n)
             .into_par_iter()
             .with_min_len(4096)
@@ -236,7 +244,7 @@ pub fn build(
     } else {
         (0..n).map(make).collect()
     };
-    let rec = Record::of(&refs);
+    let rec = Record::of(&refs, pass);
     // A tree over n primitives has fewer than n interior nodes (each has two children or more).
     let builder = Builder {
         settings: BuildSettings {
@@ -247,11 +255,7 @@ pub fn build(
         nodes: Arena::with_capacity(n),
         sink,
         ordered: in_spatial_order(&refs, &rec),
-        pass: if rayon::current_num_threads() > 1 {
-            PARALLEL_PASS_SHARED
-        } else {
-            PARALLEL_PASS
-        },
+        pass,
     };
     let root = builder.subtree(&mut refs, rec, 1, &mut Bins::new());
     Bvh8 {
@@ -493,7 +497,7 @@ impl<S: LeafSink> Builder<'_, S> {
     ) -> (usize, Record, Record) {
         let mid_rec = |refs: &[PrimRef], mid: usize| {
             let (l, r) = refs.split_at(mid);
-            (mid, Record::of(l), Record::of(r))
+            (mid, Record::of(l, self.pass), Record::of(r, self.pass))
         };
         match split {
             Some(s) => {
@@ -917,10 +921,13 @@ mod tests {
     fn spatial_order_is_told_from_no_order() {
         for n in [300, 5000] {
             let ordered = line_of_refs(n, false);
-            assert!(in_spatial_order(&ordered, &Record::of(&ordered)), "n {n}");
+            assert!(
+                in_spatial_order(&ordered, &Record::of(&ordered, PARALLEL_PASS)),
+                "n {n}"
+            );
             let shuffled = line_of_refs(n, true);
             assert!(
-                !in_spatial_order(&shuffled, &Record::of(&shuffled)),
+                !in_spatial_order(&shuffled, &Record::of(&shuffled, PARALLEL_PASS)),
                 "n {n}"
             );
         }
@@ -933,7 +940,10 @@ mod tests {
             .into_iter()
             .map(|shuffled| {
                 let refs = line_of_refs(3000, shuffled);
-                assert_eq!(in_spatial_order(&refs, &Record::of(&refs)), !shuffled);
+                assert_eq!(
+                    in_spatial_order(&refs, &Record::of(&refs, PARALLEL_PASS)),
+                    !shuffled
+                );
                 let order: Vec<(u32, f32)> = refs.iter().map(|r| (r.id(), r.min.y)).collect();
                 let sink = RecordingSink::default();
                 let bvh = build(
