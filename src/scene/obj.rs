@@ -94,23 +94,21 @@ fn split_lines(bytes: &[u8], chunk_bytes: usize) -> Vec<&[u8]> {
 /// is UTF-8 chunk by chunk.
 fn parse_obj_in_chunks(bytes: &[u8], path: &Path, chunk_bytes: usize) -> Result<ObjMesh> {
     let pieces = split_lines(bytes, chunk_bytes);
-    // The pieces are UTF-8 if and only if the whole is; `decode_text` names the first bad
-    // byte's position.
-    let chunks: Option<Vec<&str>> = pieces
+    // One task per chunk, which checks its UTF-8 and reads its points (one parallel phase, not
+    // two: the threads are not put to sleep and woken between them). The pieces are UTF-8 if
+    // and only if the whole is; `decode_text` names the first bad byte's position.
+    let read: Option<Vec<(&str, Points)>> = pieces
         .par_iter()
         .with_max_len(1)
-        .map(|p| std::str::from_utf8(p).ok())
+        .map(|p| std::str::from_utf8(p).ok().map(|c| (c, read_points(c))))
         .collect();
-    let chunks = match chunks {
-        Some(chunks) => chunks,
-        None => vec![decode_text(bytes, path)?],
+    let (chunks, points): (Vec<&str>, Vec<Points>) = match read {
+        Some(read) => read.into_iter().unzip(),
+        None => {
+            let text = decode_text(bytes, path)?;
+            (vec![text], vec![read_points(text)])
+        }
     };
-    // One task per chunk: points gather at the start of a file, faces after them.
-    let points: Vec<Points> = chunks
-        .par_iter()
-        .with_max_len(1)
-        .map(|c| read_points(c))
-        .collect();
     // Chunks after the first one that stopped cannot matter: their error would come later.
     let used = points
         .iter()
