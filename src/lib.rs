@@ -125,6 +125,7 @@ pub mod stats;
 pub mod wavefront;
 #[doc(hidden)]
 pub mod witness;
+pub(crate) mod workers;
 
 pub use error::{Error, Result};
 pub use frame::{CostMap, Frame};

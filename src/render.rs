@@ -30,18 +30,33 @@ pub fn render_with_progress(
     opts: &RenderOptions,
     progress: Progress,
 ) -> Result<Frame> {
+    render_on(&worker_pool(opts)?, scene, opts, progress)
+}
+
+/// The worker threads a render with `opts` runs on: `opts.threads` of them (see
+/// [`crate::workers`]), each with the stack its bounces need. The command line makes one pool
+/// for the whole run and loads the scene and encodes the images on it too: the threads that
+/// render are then already running, spread over the CPUs and with their memory in use.
+pub fn worker_pool(opts: &RenderOptions) -> Result<rayon::ThreadPool> {
     check_options(opts)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.threads)
-        .stack_size(stack_size(opts.shade.bounces))
-        .build()
-        .map_err(|e| {
-            Error::Other(format!(
-                "cannot start worker threads ({} MiB of stack each for {} bounces): {e}",
-                stack_size(opts.shade.bounces) >> 20,
-                opts.shade.bounces
-            ))
-        })?;
+    crate::workers::pool(opts.threads, Some(stack_size(opts.shade.bounces))).map_err(|e| {
+        Error::Other(format!(
+            "cannot start worker threads ({} MiB of stack each for {} bounces): {e}",
+            stack_size(opts.shade.bounces) >> 20,
+            opts.shade.bounces
+        ))
+    })
+}
+
+/// Renders `scene` with `opts` on `pool` (made by [`worker_pool`] for these options),
+/// reporting finished rows to `progress`.
+pub fn render_on(
+    pool: &rayon::ThreadPool,
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: Progress,
+) -> Result<Frame> {
+    check_options(opts)?;
     if let Some(grid_opts) = &opts.grid {
         let t0 = Instant::now();
         let grid = Grid::build(scene, grid_opts.cells);
@@ -56,12 +71,12 @@ pub fn render_with_progress(
             (Some(view), Tracer::Packet) => {
                 pool.install(|| render_grid_packet(scene, &grid, view, opts, progress))
             }
-            (None, _) => render_scene(scene, opts, &pool, progress)?,
+            (None, _) => render_scene(scene, opts, pool, progress)?,
         };
         frame.grid = Some(stats);
         return Ok(frame);
     }
-    render_scene(scene, opts, &pool, progress)
+    render_scene(scene, opts, pool, progress)
 }
 
 /// Renders the scene itself (not the grid picture) with the chosen tracer.
@@ -94,9 +109,7 @@ fn render_scene(
 /// is what it measures.
 pub fn eye_ray_costs(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Result<CostMap> {
     check_options(opts)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(opts.threads)
-        .build()
+    let pool = crate::workers::pool(opts.threads, None)
         .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
     let geometry = pool.install(|| Geometry::from_scene(scene));
     Ok(pool.install(|| crate::wavefront::eye_ray_costs(scene, &geometry, opts, progress)))

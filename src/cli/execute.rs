@@ -65,11 +65,8 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
     // The OBJ loader reads big meshes in parallel, and the images are converted and encoded in
-    // parallel: on as many threads as the render (`--threads`), never rayon's global pool.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(cmd.render.threads)
-        .build()
-        .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
+    // parallel: on the render's own threads (`--threads`), never rayon's global pool.
+    let pool = render::worker_pool(&cmd.render)?;
     let mut scene = pool.install(|| Scene::load(&cmd.scene))?;
     if cmd.smooth_normals {
         scene.smooth_normals();
@@ -98,7 +95,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     if traced {
         let t1 = Instant::now();
         let bar = RowBar::new("render", win.height());
-        let frame = render::render_with_progress(&scene, &cmd.render, &|rows| bar.rows_done(rows))?;
+        let frame = render::render_on(&pool, &scene, &cmd.render, &|rows| bar.rows_done(rows))?;
         bar.finish();
         phases.push(("render", t1.elapsed()));
         let t2 = Instant::now();
