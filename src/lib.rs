@@ -91,6 +91,7 @@ pub mod bvh;
 #[doc(hidden)]
 pub mod cli;
 pub mod error;
+pub(crate) mod fill;
 pub mod film;
 pub mod filter;
 pub mod frame;

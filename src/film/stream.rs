@@ -21,6 +21,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use super::{FilmSpec, SampleBlock, SampleRows, filter_rows};
 use crate::error::Result;
+use crate::fill::filled;
 use crate::math::Vec3;
 use crate::options::{Progress, Window};
 
@@ -149,10 +150,10 @@ where
         window: w,
         image_width: spec.image_width,
         image_height: spec.image_height,
-        color: vec![Vec3::ZERO; pixels],
-        depth: vec![f32::INFINITY; aux],
-        normal: vec![Vec3::ZERO; aux],
-        samples: vec![Vec3::ZERO; kept],
+        color: filled(pixels, Vec3::ZERO),
+        depth: filled(aux, f32::INFINITY),
+        normal: filled(aux, Vec3::ZERO),
+        samples: filled(kept, Vec3::ZERO),
     };
     let outputs = split_rows(&plan, &mut out, ww, spp);
     let shared = Mutex::new(Shared {

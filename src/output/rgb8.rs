@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 use super::Format;
 use crate::error::{Error, Result};
+use crate::fill::filled;
 use crate::frame::Frame;
 use crate::math::Vec3;
 
@@ -34,7 +35,7 @@ const PIXELS_PER_TASK: usize = 1 << 14;
 /// otherwise: ~10 ms a megapixel).
 fn from_pixels(frame: &Frame, f: impl Fn(usize) -> Vec3 + Sync) -> Rgb8 {
     let n = frame.width as usize * frame.height as usize;
-    let mut data = vec![0u8; n * 3];
+    let mut data = filled(n * 3, 0u8);
     data.par_chunks_mut(3 * PIXELS_PER_TASK)
         .enumerate()
         .for_each(|(task, bytes)| {
@@ -84,7 +85,7 @@ pub(super) fn encode_rgb8(w: u32, h: u32, data: &[u8], format: Format) -> Result
         }
         Format::Tga => {
             // Uncompressed true-colour, 24 bits, rows stored bottom to top (origin bottom left).
-            let mut out = vec![0u8; 18 + data.len()];
+            let mut out = filled(18 + data.len(), 0u8);
             out[2] = 2;
             out[12..14].copy_from_slice(&(w as u16).to_le_bytes());
             out[14..16].copy_from_slice(&(h as u16).to_le_bytes());

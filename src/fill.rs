@@ -1,0 +1,45 @@
+//! Big buffers made in parallel: [`filled`] is `vec![value; n]` with the filling shared out
+//! over the current rayon pool. A leaf: the film (its output image) and the 8-bit encoders use
+//! it.
+//!
+//! Why: `vec![0.0; n]` on a worker thread whose malloc arena has served earlier phases (the
+//! command line loads, builds, renders and encodes on one pool) is cleared by that one thread
+//! (calloc clears reused memory itself), first-touching every page of it: for the 7.7 MB film of
+//! an 800x800 frame, about a millisecond of huge-page zeroing at the start of every render on
+//! one thread while the other waited (`perf`, PERF.md sitting 22).
+
+use rayon::prelude::*;
+
+/// Buffers of fewer elements than this are filled on the calling thread.
+const PARALLEL_MIN: usize = 1 << 16;
+
+/// `vec![value; n]`, filled in parallel on the current rayon pool when `n` is large.
+pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
+    if n < PARALLEL_MIN {
+        return vec![value; n];
+    }
+    let mut v = Vec::with_capacity(n);
+    v.par_extend(rayon::iter::repeat_n(value, n));
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{PARALLEL_MIN, filled};
+
+    #[test]
+    fn a_filled_buffer_is_the_value_n_times_below_and_above_the_parallel_size() {
+        for n in [
+            0,
+            1,
+            1000,
+            PARALLEL_MIN - 1,
+            PARALLEL_MIN,
+            3 * PARALLEL_MIN + 7,
+        ] {
+            let v = filled(n, 7u16);
+            assert_eq!(v.len(), n);
+            assert!(v.iter().all(|&x| x == 7));
+        }
+    }
+}
