@@ -3,14 +3,14 @@
 //! those take every CPU the process may run on, it pins worker `i` to the `i`-th of them. A
 //! leaf: the command line and the render's front door call it; it knows nothing of the tracer.
 //!
-//! Why pin: Linux places a young process's threads by their (still small) load, and this
-//! project's machines (2 vCPUs) kept both workers of a new pool on one CPU for the first 10–30
-//! ms of a process — a frame's whole parse and BVH build — before spreading them. In a test of
-//! 40 parallel steps of 1 ms, each after 0.3 ms of serial work, 5 processes of 12 ran some of
-//! their first 30 steps on one CPU, one thread after the other (unpinned), against 0 of 12
-//! pinned (PERF.md, sitting 22). A pool smaller than the machine is left to the scheduler, as
-//! is every pool elsewhere than on Linux. Pinning never changes what is computed: the bytes of
-//! an image do not depend on which thread traced what.
+//! Why pin: Linux places a young process's threads by their (still small) load, and on this
+//! project's machines (2 vCPUs) it often kept both workers of a new pool on one CPU for the
+//! first 10–30 ms of a process — a frame's whole parse and BVH build — before spreading them.
+//! In a test of 40 parallel steps of 1 ms, each after 0.3 ms of serial work, 14 to 19 of 20
+//! fresh processes ran some of their first 30 steps with both workers on one CPU, taking turns
+//! (three batches); pinned, 0 or 1 of 20 (PERF.md, sitting 22). A pool smaller than the
+//! machine is left to the scheduler, as is every pool elsewhere than on Linux. Pinning never
+//! changes what is computed: the bytes of an image do not depend on which thread traced what.
 
 use rayon::{ThreadPool, ThreadPoolBuildError, ThreadPoolBuilder};
 
