@@ -33,10 +33,11 @@ pub fn render_with_progress(
     render_on(&worker_pool(opts)?, scene, opts, progress)
 }
 
-/// The worker threads a render with `opts` runs on: `opts.threads` of them (see
-/// [`crate::workers`]), each with the stack its bounces need. The command line makes one pool
-/// for the whole run and loads the scene and encodes the images on it too: the threads that
-/// render are then already running, spread over the CPUs and with their memory in use.
+/// The worker threads a render with `opts` runs on: `opts.threads` of them, each with the
+/// stack its bounces need, pinned one to a CPU when they take every CPU the process may use.
+/// The command line makes one pool for the whole run and loads the scene and encodes the
+/// images on it too: the threads that render are then already running, spread over the CPUs
+/// and with their memory in use.
 pub fn worker_pool(opts: &RenderOptions) -> Result<rayon::ThreadPool> {
     check_options(opts)?;
     crate::workers::pool(opts.threads, Some(stack_size(opts.shade.bounces))).map_err(|e| {
