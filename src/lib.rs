@@ -67,7 +67,8 @@
 //!
 //! ```text
 //! leaves       error, math, simd (the only file naming `wide`), progress, filter, sampler,
-//!              hugepages (the binary's allocator: huge pages for big blocks)
+//!              hugepages (the binary's allocator: huge pages for big blocks), fill (big
+//!              buffers filled in parallel), workers (thread pools, pinned one per CPU)
 //! data         packet (8-ray SoA), scene (parsed tree, cameras, textures)
 //! kernels      intersect (Hit and the primitive tests), bvh (knows no primitive)
 //! shared       shade, raytree, stats, options, frame, film (samples to pixels),
