@@ -1,6 +1,6 @@
 //! Big buffers made in parallel: [`filled`] is `vec![value; n]` with the filling shared out
-//! over the current rayon pool. A leaf: the film (its output image) and the 8-bit encoders use
-//! it.
+//! over the current rayon pool, [`try_filled`] the same without aborting when memory runs out.
+//! A leaf: the film (its output image), the 8-bit encoders and the input reader use it.
 //!
 //! Why: `vec![0.0; n]` on a worker thread whose malloc arena has served earlier phases (the
 //! command line loads, builds, renders and encodes on one pool) is cleared by that one thread
@@ -23,9 +23,18 @@ pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
     v
 }
 
+/// [`filled`], or `None` when the memory cannot be had (no abort: a huge input file is an
+/// error, not a crash).
+pub fn try_filled<T: Copy + Send + Sync>(n: usize, value: T) -> Option<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).ok()?;
+    v.par_extend(rayon::iter::repeat_n(value, n));
+    Some(v)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{PARALLEL_MIN, filled};
+    use super::{PARALLEL_MIN, filled, try_filled};
 
     #[test]
     fn a_filled_buffer_is_the_value_n_times_below_and_above_the_parallel_size() {
@@ -37,9 +46,10 @@ mod tests {
             PARALLEL_MIN,
             3 * PARALLEL_MIN + 7,
         ] {
-            let v = filled(n, 7u16);
-            assert_eq!(v.len(), n);
-            assert!(v.iter().all(|&x| x == 7));
+            for v in [filled(n, 7u16), try_filled(n, 7u16).unwrap()] {
+                assert_eq!(v.len(), n);
+                assert!(v.iter().all(|&x| x == 7));
+            }
         }
     }
 }

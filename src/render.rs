@@ -109,9 +109,7 @@ fn render_scene(
 /// primitives tested), for `--heatmap`; whatever `opts.tracer` says, the packet tracer's BVH
 /// is what it measures.
 pub fn eye_ray_costs(scene: &Scene, opts: &RenderOptions, progress: Progress) -> Result<CostMap> {
-    check_options(opts)?;
-    let pool = crate::workers::pool(opts.threads, None)
-        .map_err(|e| Error::Other(format!("cannot start worker threads: {e}")))?;
+    let pool = worker_pool(opts)?;
     let geometry = pool.install(|| Geometry::from_scene(scene));
     Ok(pool.install(|| crate::wavefront::eye_ray_costs(scene, &geometry, opts, progress)))
 }

@@ -238,7 +238,7 @@ pub fn build(
     let mut refs: Vec<PrimRef> = if n > pass {
         (0..n)
             .into_par_iter()
-            .with_min_len(4096)
+            .with_min_len(PARALLEL_PASS_SHARED)
             .map(make)
             .collect()
     } else {

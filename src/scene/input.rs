@@ -15,6 +15,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::fill::try_filled;
 
 /// Files of at least this many bytes are read in pieces of this size, in parallel. Small enough
 /// that the course's 1.3 MB bunny is read in pieces: read whole, it was a serial 0.7 ms of every
@@ -54,11 +55,9 @@ pub(crate) fn read_file(path: &Path, action: &'static str) -> Result<Vec<u8>> {
 fn read_in_pieces(path: &Path, len: usize) -> Option<Vec<u8>> {
     use std::os::unix::fs::FileExt;
     let file = std::fs::File::open(path).ok()?;
-    let mut bytes = Vec::new();
-    bytes.try_reserve_exact(len).ok()?;
-    // Zeroed in parallel too: the pages of a fresh buffer are touched by the thread that reads
+    // Zeroed in parallel too: the pages of a fresh buffer are touched by the threads that read
     // into them.
-    bytes.par_extend(rayon::iter::repeat_n(0u8, len));
+    let mut bytes = try_filled(len, 0u8)?;
     bytes
         .par_chunks_mut(PIECE_BYTES)
         .enumerate()
