@@ -78,45 +78,6 @@ pub fn keep_freed_memory() {
     }
 }
 
-/// Asks Linux to back the whole pages inside `p..p + len` now, as a first write would, without
-/// writing (`MADV_POPULATE_WRITE`, Linux 5.14): the contents stay as they are, so other threads
-/// may read and write the range meanwhile. Returns whether the kernel did; elsewhere, and on
-/// older kernels, it does nothing and returns `false`.
-///
-/// Why: the first write to a fresh huge page makes the kernel zero all 2 MiB of it, and on this
-/// project's VMs that took 2–6 ms when the host had not backed the page yet (PERF.md, sitting 23).
-/// A builder task that pays it keeps its worker from the rest of the build; a task that only
-/// populates can run beside the build on a worker that would otherwise wait.
-///
-/// # Safety
-/// `p..p + len` lies inside one live allocation of the caller's (populating other memory would
-/// not change it either, but the caller has no business there).
-pub unsafe fn populate(p: *const u8, len: usize) -> bool {
-    #[cfg(target_os = "linux")]
-    {
-        const PAGE: usize = 4096;
-        let start = (p as usize).next_multiple_of(PAGE);
-        let end = (p as usize + len) & !(PAGE - 1);
-        if p.is_null() || end <= start {
-            return false;
-        }
-        // SAFETY: the range lies inside the caller's allocation (this function's contract);
-        // MADV_POPULATE_WRITE only faults its pages in, changing no byte of them.
-        unsafe {
-            libc::madvise(
-                start as *mut libc::c_void,
-                end - start,
-                libc::MADV_POPULATE_WRITE,
-            ) == 0
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    {
-        let _ = (p, len);
-        false
-    }
-}
-
 /// Advises the whole 4 KiB pages inside `p..p + len` for huge pages, if the block is big.
 #[inline]
 fn advise(p: *mut u8, len: usize) {
@@ -141,30 +102,6 @@ fn advise(p: *mut u8, len: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn populating_a_block_keeps_what_it_holds() {
-        let size = 3 * HUGE_MIN_BYTES + 4096 * 3 + 5;
-        let layout = Layout::from_size_align(size, 64).unwrap();
-        // SAFETY: non-zero size; the pointer is checked, every range lies inside the block, and
-        // the block is freed with its layout.
-        unsafe {
-            let p = HugePages.alloc(layout);
-            assert!(!p.is_null());
-            let written = size / 3;
-            for i in 0..written {
-                *p.add(i) = (i % 251) as u8;
-            }
-            populate(p, size);
-            assert!((0..written).all(|i| *p.add(i) == (i % 251) as u8));
-            for i in written..size {
-                *p.add(i) = (i % 13) as u8;
-            }
-            assert!((written..size).all(|i| *p.add(i) == (i % 13) as u8));
-            assert!(!populate(p, 100), "less than a whole page is not populated");
-            HugePages.dealloc(p, layout);
-        }
-    }
 
     #[test]
     fn big_and_small_blocks_keep_their_contents_through_growth() {

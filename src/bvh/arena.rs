@@ -9,8 +9,6 @@ use std::cell::UnsafeCell;
 use std::mem::MaybeUninit;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use crate::hugepages::populate;
-
 /// Slots of `T`, claimed and written by any thread, each exactly once.
 pub struct Arena<T: Copy> {
     slots: Box<[UnsafeCell<MaybeUninit<T>>]>,
@@ -35,14 +33,6 @@ impl<T: Copy> Arena<T> {
             #[cfg(debug_assertions)]
             written: AtomicUsize::new(0),
         }
-    }
-
-    /// Has the kernel back the memory of the first `slots` slots now, as their first writes
-    /// would, without writing them ([`populate`]): safe beside tasks that claim and write slots.
-    pub fn populate(&self, slots: usize) {
-        let slots = &self.slots[..slots.min(self.slots.len())];
-        // SAFETY: the range is the slots' own memory, inside this arena's allocation.
-        unsafe { populate(slots.as_ptr().cast(), std::mem::size_of_val(slots)) };
     }
 
     /// Claims `n` consecutive slots; returns the first. Panics past the capacity.
@@ -107,26 +97,6 @@ mod tests {
         assert_eq!(v.len(), 3000);
         v.sort_unstable();
         assert!(v.iter().enumerate().all(|(i, &x)| x == i as u64));
-    }
-
-    #[test]
-    fn populating_beside_the_writers_keeps_every_slot() {
-        // 4 MiB, populated whole while the tasks claim and write, then again after them
-        let a: Arena<[u64; 8]> = Arena::with_capacity(1 << 16);
-        let write = || {
-            (0..4000u64).into_par_iter().for_each(|k| {
-                let first = a.alloc(4);
-                for j in 0..4 {
-                    a.set(first + j, [k * 4 + j as u64; 8]);
-                }
-            })
-        };
-        rayon::join(write, || a.populate(1 << 16));
-        a.populate(usize::MAX);
-        let mut v = a.into_vec();
-        assert_eq!(v.len(), 16_000);
-        v.sort_unstable();
-        assert!(v.iter().enumerate().all(|(i, x)| *x == [i as u64; 8]));
     }
 
     #[test]

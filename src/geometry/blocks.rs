@@ -107,19 +107,6 @@ pub struct Blocks {
     pub transformed: Vec<u32>,
 }
 
-/// [`expected_blocks`] guesses at most this many bytes beyond the blocks every build fills.
-pub const MAX_EXTRA_POPULATED_BYTES: usize = 2 << 20;
-
-/// The blocks a build over `prims` primitives of one kind is expected to fill: at least one per
-/// [`BLOCK`], and leaves are not all full, so a quarter more, but at most `max_extra` more. The
-/// course's 40k bunny fills 1.11 times the fewest (11,149 blocks for 40,000 triangles), torus1m
-/// 1.06 and spheres4096 1.0. A guess too small only leaves the rest to be faulted in by the
-/// leaves' writes, as without it; one too big costs memory the leaves never use.
-pub fn expected_blocks(prims: usize, max_extra: usize) -> usize {
-    let fewest = prims.div_ceil(BLOCK);
-    fewest + (fewest / 4).min(max_extra)
-}
-
 /// The sink the BVH builder hands leaves to: fills the block arenas from the geometry's SoA
 /// arrays (in parallel, each leaf once).
 pub struct BlockSink<'g> {
@@ -138,22 +125,6 @@ impl<'g> BlockSink<'g> {
             spheres: Arena::with_capacity(geometry.spheres.len()),
             transformed: Arena::with_capacity(geometry.transformed.len()),
         }
-    }
-
-    /// Has the kernel back, now, the blocks a build is expected to fill ([`expected_blocks`],
-    /// [`Arena::populate`]). Run beside the build on another worker, this moves the zeroing of
-    /// fresh pages off the build's tasks; it writes nothing, so it may overlap their writes.
-    pub fn populate_expected(&self) {
-        let g = self.geometry;
-        let extra = |block_bytes| MAX_EXTRA_POPULATED_BYTES / block_bytes;
-        self.triangles.populate(expected_blocks(
-            g.triangles.len(),
-            extra(std::mem::size_of::<Triangle4>()),
-        ));
-        self.spheres.populate(expected_blocks(
-            g.spheres.len(),
-            extra(std::mem::size_of::<Sphere4>()),
-        ));
     }
 
     /// The filled blocks.
@@ -576,25 +547,5 @@ impl Geometry {
             PrimKind::Plane => unreachable!("planes are not in the BVH"),
         }
         occluded & lanes
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_expected_blocks_lie_between_the_fewest_and_the_allowed_extra() {
-        assert_eq!(expected_blocks(0, 100), 0);
-        assert_eq!(expected_blocks(1, 100), 1);
-        assert_eq!(expected_blocks(40_000, 1 << 20), 12_500);
-        assert_eq!(expected_blocks(40_000, 1_000), 11_000);
-        for n in [3, 4, 5, 17, 4096, 1_000_002] {
-            let e = expected_blocks(n, 7);
-            assert!(
-                e >= n.div_ceil(BLOCK) && e <= n.div_ceil(BLOCK) + 7,
-                "{n}: {e}"
-            );
-        }
     }
 }

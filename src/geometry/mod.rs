@@ -200,21 +200,12 @@ impl Geometry {
         };
         let g = &*self;
         let sink = BlockSink::new(g);
-        let build = || {
-            bvh::build::build(
-                bounded,
-                |i| (g.bounds(i as u32), g.locate(i as u32).0 as u8),
-                &settings,
-                &sink,
-            )
-        };
-        // With more than one thread, a worker with nothing to steal yet has the kernel back the
-        // leaf blocks while the build starts here (PERF.md, sitting 23).
-        let bvh = if rayon::current_num_threads() > 1 {
-            rayon::join(build, || sink.populate_expected()).0
-        } else {
-            build()
-        };
+        let bvh = bvh::build::build(
+            bounded,
+            |i| (g.bounds(i as u32), g.locate(i as u32).0 as u8),
+            &settings,
+            &sink,
+        );
         let blocks = sink.finish();
         self.bvh = bvh;
         self.blocks = blocks;
