@@ -258,10 +258,13 @@ impl Plane {
 /// Returns the lanes that enter within `(tmin, tmax)` (the exit widened by that error,
 /// [`widen_exit`]) and their entry distances. Shared by the single-ray test (lanes = children)
 /// and the packet's octant test (lanes = rays). `FORWARD` promises `tmin >= 0` in every lane;
-/// then the maximum and minimum compare bits as integers ([`crate::simd::max_bits`], one cycle
-/// on the walk's chain, as in Embree): the entry maximum includes `tmin >= 0`, so it is the
-/// float one, and the exit minimum is the float one where every exit is at least 0 and
-/// negative otherwise, as the float one is, which culls the lane either way. `WIDENED` says
+/// then the maximum, the minimum and the comparison of the two take the bits as integers
+/// ([`crate::simd::max_bits`], [`crate::simd::le_bits`]: one cycle each on the walk's chain of
+/// dependent operations, as in Embree; a float comparison takes four on Intel's cores): the
+/// entry maximum includes `tmin >= 0`, so it is the float one, and the exit minimum is the
+/// float one where every exit is at least 0 and negative otherwise, as the float one is, which
+/// culls the lane (a negative exit, `-0` included, leaves nothing after `tmin`; the float
+/// comparison kept a box left at exactly `-0`). `WIDENED` says
 /// the exit distances and `tmax` come already widened (the forward single-ray test folds the
 /// widening into its exit planes), so none is applied here.
 #[inline(always)]
@@ -273,7 +276,7 @@ fn slab_octant<const FORWARD: bool, const WIDENED: bool>(
     tmin: F32x8,
     tmax: F32x8,
 ) -> (crate::simd::Mask, F32x8) {
-    use crate::simd::{le, max, max_bits, min, min_bits};
+    use crate::simd::{le, le_bits, max, max_bits, min, min_bits};
     type Pick = fn(F32x8, F32x8) -> F32x8;
     let (max, min): (Pick, Pick) = if FORWARD {
         (max_bits, min_bits)
@@ -293,7 +296,11 @@ fn slab_octant<const FORWARD: bool, const WIDENED: bool>(
     } else {
         widen_exit::<FORWARD>(t1)
     };
-    (le(t0, t1), t0)
+    if FORWARD {
+        (le_bits(t0, t1), t0)
+    } else {
+        (le(t0, t1), t0)
+    }
 }
 
 /// An interior node: its children's boxes structure of arrays and their references. Children
