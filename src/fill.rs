@@ -15,11 +15,8 @@ const PARALLEL_MIN: usize = 1 << 16;
 
 /// `vec![value; n]`, filled in parallel on the current rayon pool when `n` is large.
 pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
-    if n < PARALLEL_MIN {
-        return vec![value; n];
-    }
     let mut v = Vec::with_capacity(n);
-    v.par_extend(rayon::iter::repeat_n(value, n));
+    fill(&mut v, n, value);
     v
 }
 
@@ -28,8 +25,18 @@ pub fn filled<T: Copy + Send + Sync>(n: usize, value: T) -> Vec<T> {
 pub fn try_filled<T: Copy + Send + Sync>(n: usize, value: T) -> Option<Vec<T>> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).ok()?;
-    v.par_extend(rayon::iter::repeat_n(value, n));
+    fill(&mut v, n, value);
     Some(v)
+}
+
+/// Appends `n` copies of `value` to `v`, whose capacity already holds them: in parallel when
+/// `n` is large.
+fn fill<T: Copy + Send + Sync>(v: &mut Vec<T>, n: usize, value: T) {
+    if n < PARALLEL_MIN {
+        v.extend(std::iter::repeat_n(value, n));
+    } else {
+        v.par_extend(rayon::iter::repeat_n(value, n));
+    }
 }
 
 #[cfg(test)]
