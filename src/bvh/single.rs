@@ -243,6 +243,13 @@ impl Entered {
     fn mask(&self, l: usize) -> u32 {
         (self.by_lane >> (8 * l)) as u32 & 0xff
     }
+
+    /// The lanes that enter a child at all (bit `l` = lane `l`): the others hit nothing in the
+    /// tree.
+    #[inline(always)]
+    pub fn lanes(&self) -> u32 {
+        (0..8).fold(0, |m, l| m | u32::from(self.mask(l) != 0) << l)
+    }
 }
 
 /// The transpose of an 8x8 bit matrix held row by row in the bytes of a `u64` (bit `c` of

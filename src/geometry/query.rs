@@ -290,6 +290,12 @@ impl Geometry {
                 let root = self.bvh.enter_root(&p, r.tmin, h.t);
                 (p, root)
             });
+            if let Some((_, Some(root))) = &prepared
+                && self.planes.is_empty()
+            {
+                // a lane that enters none of the root's children hits nothing: no walk to start
+                active &= root.lanes();
+            }
             while active != 0 {
                 let l = active.trailing_zeros() as usize;
                 active &= active - 1;
