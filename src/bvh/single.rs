@@ -166,7 +166,7 @@ impl Ray1x8 {
     }
 
     /// The lanes that enter child `i` of `n` within `(tmin, tmax)` and their entry distances:
-    /// [`Ray1::test`] of each lane, each in its own octant (a blend picks its planes), so the
+    /// [`Ray1::test`] of each lane, each in its own octant (a mask picks its planes), so the
     /// same bits as that lane's single-ray test of the child. The packet walk's test of one
     /// child for rays of mixed octants (incoherent packets, which have no frustum).
     #[inline(always)]
@@ -178,15 +178,18 @@ impl Ray1x8 {
         tmax: F32x8,
     ) -> (Mask, F32x8) {
         let plane = |k: usize| F32x8::splat(n.bounds[k].as_array()[i]);
-        let (lo, hi) = (|a: usize| plane(LO + a), |a: usize| plane(HI + a));
-        let entry = |_: Plane, a: usize| {
-            let p = select(self.neg[a], hi(a), lo(a));
-            fused_mul_add(p, self.inv[a], self.neg_oi_near[a])
-        };
-        let exit = |_: Plane, a: usize| {
-            let p = select(self.neg[a], lo(a), hi(a));
-            fused_mul_add(p, self.inv_exit[a], self.neg_oi_far[a])
-        };
+        // each lane's entry plane `lo ^ ((lo ^ hi) & neg)` and exit plane `hi ^ ((lo ^ hi) &
+        // neg)`: both picks from one masked difference, 4 operations an axis where two blends
+        // take 6 micro-operations on Intel's cores
+        let planes: [(F32x8, F32x8); 3] = std::array::from_fn(|a| {
+            let (lo, hi) = (plane(LO + a), plane(HI + a));
+            let flip = (lo ^ hi) & self.neg[a];
+            (lo ^ flip, hi ^ flip)
+        });
+        let entry =
+            |_: Plane, a: usize| fused_mul_add(planes[a].0, self.inv[a], self.neg_oi_near[a]);
+        let exit =
+            |_: Plane, a: usize| fused_mul_add(planes[a].1, self.inv_exit[a], self.neg_oi_far[a]);
         // the planes are the lanes' own (the closures ignore the octant's)
         let any_octant = Plane::ENTRY_OF_OCTANT[0];
         let tmax = tmax * F32x8::splat(ROBUST);
