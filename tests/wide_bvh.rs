@@ -3,7 +3,8 @@
 //! scenes, more primitives than a leaf may hold at one point), leaf blocks with partly filled
 //! lanes report only their own primitives, and every path through the tree (single rays, 8-ray
 //! packets, streams of packets, the per-group choice) gives the same `(t, primitive)` bit for
-//! bit on the same rays, ties in `t` included.
+//! bit on the same rays, ties in `t` included, and leaves a lane's hit as it was where nothing
+//! in the tree beats it.
 
 mod common;
 
@@ -351,6 +352,64 @@ fn ties_go_to_the_smaller_index_on_every_path() {
                 }
                 let got = hits[0].lane(l).map(|(t, p)| (t, p as u32));
                 assert_eq!(got, single, "{path:?} lane {l}");
+            }
+        }
+    }
+}
+
+/// A lane whose current hit is nearer than anything the tree holds for it (or that misses the
+/// tree) keeps that hit on every path: the single-ray batch starts no walk for a lane its
+/// packet's root test sends nowhere, and no path may overwrite a hit it did not beat.
+#[test]
+fn lanes_with_a_nearer_hit_keep_it_on_every_path() {
+    let mut rng = Rng::new(11);
+    let g = built(&soup(&mut rng, 3000), &BuildSettings::default());
+    const KEPT: i32 = 7_000_000;
+    for group in ray_groups(&mut rng, 40) {
+        // lanes start with a hit of their own: far, near (0.25, where the soup seldom is) or none
+        let start: Vec<([f32; LANES], [i32; LANES])> = group
+            .iter()
+            .map(|_| {
+                let mut t = [f32::INFINITY; LANES];
+                let mut prim = [-1; LANES];
+                for l in 0..LANES {
+                    match rng.below(3) {
+                        0 => (t[l], prim[l]) = (0.25, KEPT),
+                        1 => (t[l], prim[l]) = (rng.range(1.0, 30.0), KEPT + 1),
+                        _ => {}
+                    }
+                }
+                (t, prim)
+            })
+            .collect();
+        for path in Path::ALL {
+            let mut hits: Vec<HitPacket> = start
+                .iter()
+                .map(|(t, prim)| HitPacket {
+                    t: from_lanes(*t),
+                    prim: whitted::simd::I32x8::new(*prim),
+                })
+                .collect();
+            g.closest_hit_path(path, &group, &mut hits);
+            for (k, (h, p)) in hits.iter().zip(&group).enumerate() {
+                let (t, prim) = (lanes(h.t), lanes_i32(h.prim));
+                let (tmin, bits) = (lanes(p.tmin), bitmask(p.active));
+                let (t0, p0) = start[k];
+                for l in 0..LANES {
+                    let want = if bits >> l & 1 == 0 {
+                        (t0[l], p0[l])
+                    } else {
+                        match g.closest_hit(&p.ray(l), tmin[l], t0[l]) {
+                            Some((t, prim)) => (t, prim as i32),
+                            None => (t0[l], p0[l]),
+                        }
+                    };
+                    assert_eq!(
+                        (t[l].to_bits(), prim[l]),
+                        (want.0.to_bits(), want.1),
+                        "{path:?}, packet {k} lane {l}"
+                    );
+                }
             }
         }
     }
