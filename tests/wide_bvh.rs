@@ -14,7 +14,9 @@ use whitted::bvh::build::BuildSettings;
 use whitted::geometry::{Geometry, Path};
 use whitted::math::{Ray, Vec3};
 use whitted::packet::{HitPacket, RayPacket};
-use whitted::simd::{F32x8, LANES, Mask, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits};
+use whitted::simd::{
+    F32x8, I32x8, LANES, Mask, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits,
+};
 
 fn v(rng: &mut Rng, lo: f32, hi: f32) -> Vec3 {
     Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))
@@ -387,7 +389,7 @@ fn lanes_with_a_nearer_hit_keep_it_on_every_path() {
                 .iter()
                 .map(|(t, prim)| HitPacket {
                     t: from_lanes(*t),
-                    prim: whitted::simd::I32x8::new(*prim),
+                    prim: I32x8::new(*prim),
                 })
                 .collect();
             g.closest_hit_path(path, &group, &mut hits);
