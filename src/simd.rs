@@ -60,6 +60,8 @@ pub trait Simd:
     fn sqrt_lanes(self) -> Self;
     /// Bit `i` set when lane `i` of the mask is.
     fn bits(self) -> u32;
+    /// Lane-wise `self * b + c` with one rounding (as `f32::mul_add` in every lane).
+    fn mul_add_lanes(self, b: Self, c: Self) -> Self;
 }
 
 macro_rules! impl_simd {
@@ -104,6 +106,18 @@ macro_rules! impl_simd {
             #[inline(always)]
             fn bits(self) -> u32 {
                 self.to_bitmask()
+            }
+            #[inline(always)]
+            fn mul_add_lanes(self, b: Self, c: Self) -> Self {
+                #[cfg(all(target_feature = "avx", target_feature = "fma"))]
+                {
+                    self.mul_add(b, c)
+                }
+                #[cfg(not(all(target_feature = "avx", target_feature = "fma")))]
+                {
+                    let (a, b, c) = (self.to_array(), b.to_array(), c.to_array());
+                    <$t>::new(std::array::from_fn(|i| a[i].mul_add(b[i], c[i])))
+                }
             }
         }
     };
@@ -406,6 +420,25 @@ impl<T: Simd> Vec3v<T> {
         }
     }
 
+    /// Lane-wise dot product with fused operations: `x x' + (y y' + z z')`, each sum one fused
+    /// multiply-add ([`crate::math::dot_fused`] for one vector, the same bits).
+    #[inline(always)]
+    pub fn dot_fused(self, o: Vec3v<T>) -> T {
+        self.x
+            .mul_add_lanes(o.x, self.y.mul_add_lanes(o.y, self.z * o.z))
+    }
+
+    /// Lane-wise cross product with fused operations: each component `a b - c d` as one fused
+    /// multiply-add of `a b` and `-(c d)` ([`crate::math::cross_fused`], the same bits).
+    #[inline(always)]
+    pub fn cross_fused(self, o: Vec3v<T>) -> Vec3v<T> {
+        Vec3v {
+            x: self.y.mul_add_lanes(o.z, -(o.y * self.z)),
+            y: self.z.mul_add_lanes(o.x, -(o.z * self.x)),
+            z: self.x.mul_add_lanes(o.y, -(o.x * self.y)),
+        }
+    }
+
     /// Lane-wise squared length.
     #[inline(always)]
     pub fn length_squared(self) -> T {
@@ -570,6 +603,55 @@ mod tests {
         for i in 0..LANES {
             assert_eq!(got[i].to_bits(), x[i].mul_add(y[i], y[i]).to_bits());
         }
+    }
+
+    /// The fused dot and cross products of 8 and of 4 lanes are the scalar ones
+    /// (`math::dot_fused`, `math::cross_fused`) bit for bit, and they are fused: on some of these
+    /// vectors they differ from the unfused products.
+    #[test]
+    fn fused_dot_and_cross_are_their_scalar_twins() {
+        use crate::math::{cross_fused, dot_fused};
+        let mut x = 0x2545_f491u32;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            (x >> 8) as f32 / (1u32 << 24) as f32 * 8.0 - 4.0
+        };
+        let (mut dot_rounded, mut cross_rounded) = (0, 0);
+        for _ in 0..500 {
+            let a: [Vec3; LANES] = std::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            let b: [Vec3; LANES] = std::array::from_fn(|_| Vec3::new(next(), next(), next()));
+            let (pa, pb) = (Vec3x8::from_lanes(a), Vec3x8::from_lanes(b));
+            let lo = |v: [Vec3; LANES]| {
+                Vec3x4::from_columns(&std::array::from_fn(|axis| {
+                    std::array::from_fn(|i| v[i][axis])
+                }))
+            };
+            let (qa, qb) = (lo(a), lo(b));
+            for i in 0..LANES {
+                let (dot, cross) = (dot_fused(a[i], b[i]), cross_fused(a[i], b[i]));
+                assert_eq!(lanes(pa.dot_fused(pb))[i].to_bits(), dot.to_bits());
+                assert_eq!(
+                    pa.cross_fused(pb).lane(i).to_array().map(f32::to_bits),
+                    cross.to_array().map(f32::to_bits)
+                );
+                if i < 4 {
+                    assert_eq!(qa.dot_fused(qb).to_array()[i].to_bits(), dot.to_bits());
+                    let c = qa.cross_fused(qb);
+                    assert_eq!(
+                        [c.x, c.y, c.z].map(|v| v.to_array()[i].to_bits()),
+                        cross.to_array().map(f32::to_bits)
+                    );
+                }
+                dot_rounded += usize::from(dot != a[i].dot(b[i]));
+                cross_rounded += usize::from(cross != a[i].cross(b[i]));
+            }
+        }
+        assert!(
+            dot_rounded > 100 && cross_rounded > 100,
+            "{dot_rounded} / {cross_rounded} of 4000 differ from the unfused products"
+        );
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! and the edges `e1 = v1 - v0`, `e2 = v2 - v0`. The scalar kernel sits directly above its
 //! packet twin.
 
-use crate::math::{Ray, Vec3};
+use crate::math::{Ray, Vec3, cross_fused, dot_fused};
 use crate::packet::RayPacket;
 use crate::simd::{F32x8, Mask, Simd, Vec3v, Vec3x8, gt, lt};
 
@@ -12,7 +12,10 @@ use crate::simd::{F32x8, Mask, Simd, Vec3v, Vec3x8, gt, lt};
 /// Moller-Trumbore rearranged as Embree does: with `s = o - v0`, `R = s x d` and the
 /// unnormalised normal `Ng = e1 x e2`, the determinant is `det = -(d . Ng)` and
 /// `u = (R . e2) / det`, `v = -(R . e1) / det`, `t = (s . Ng) / det`. The tests run on the
-/// numerators scaled by the sign of `det`; `t` is divided out only for rays inside.
+/// numerators scaled by the sign of `det`; `t` is divided out only for rays inside. The dot
+/// and cross products are fused (`dot_fused`, `cross_fused`: each sum one fused multiply-add),
+/// as Embree's are where the processor has FMA: fewer operations and a shorter chain, and the
+/// hit counts of the benchmark's rays equal Embree's.
 #[inline]
 pub fn intersect_triangle(
     v0: Vec3,
@@ -24,13 +27,13 @@ pub fn intersect_triangle(
 ) -> Option<f32> {
     let ng = e1.cross(e2);
     let s = ray.origin - v0;
-    let r = s.cross(ray.dir);
-    let det = -ray.dir.dot(ng);
+    let r = cross_fused(s, ray.dir);
+    let det = -dot_fused(ray.dir, ng);
     let sign = if det < 0.0 { -1.0 } else { 1.0 };
     let abs_det = det.abs();
-    let u = r.dot(e2) * sign;
-    let v = -r.dot(e1) * sign;
-    let t = s.dot(ng) * sign;
+    let u = dot_fused(r, e2) * sign;
+    let v = -dot_fused(r, e1) * sign;
+    let t = dot_fused(s, ng) * sign;
     let inside = det != 0.0 && u >= 0.0 && v >= 0.0 && u + v <= abs_det;
     if !inside {
         return None;
@@ -55,15 +58,15 @@ pub fn triangle_lanes<T: Simd>(
 ) -> (T, T) {
     let zero = T::splat(0.0);
     let s = origin - v0;
-    let r = s.cross(dir);
-    let det = -dir.dot(ng);
+    let r = s.cross_fused(dir);
+    let det = -dir.dot_fused(ng);
     // `x * sign(det)` as a flip of the sign bit (Embree's form): the same bits wherever `det`
     // is not zero, and a zero `det` is outside below
     let sign = det & T::splat(-0.0);
     let abs_det = det.abs_lanes();
-    let u = r.dot(e2) ^ sign;
-    let v = -r.dot(e1) ^ sign;
-    let t = s.dot(ng) ^ sign;
+    let u = r.dot_fused(e2) ^ sign;
+    let v = -r.dot_fused(e1) ^ sign;
+    let t = s.dot_fused(ng) ^ sign;
     let inside = !det.eq(zero) & u.ge(zero) & v.ge(zero) & (u + v).le(abs_det);
     (inside, t / abs_det)
 }
