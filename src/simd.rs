@@ -60,7 +60,8 @@ pub trait Simd:
     fn sqrt_lanes(self) -> Self;
     /// Bit `i` set when lane `i` of the mask is.
     fn bits(self) -> u32;
-    /// Lane-wise `self * b + c` with one rounding (as `f32::mul_add` in every lane).
+    /// Lane-wise `self * b + c` with one rounding (as `f32::mul_add` in every lane): one
+    /// instruction where the build enables FMA, lane by lane through `f32::mul_add` otherwise.
     fn mul_add_lanes(self, b: Self, c: Self) -> Self;
 }
 
@@ -313,15 +314,7 @@ pub fn reduce_max(a: F32x8) -> f32 {
 /// same single rounding, which the box tests' error bound relies on).
 #[inline(always)]
 pub fn fused_mul_add(a: F32x8, b: F32x8, c: F32x8) -> F32x8 {
-    #[cfg(all(target_feature = "avx", target_feature = "fma"))]
-    {
-        a.mul_add(b, c)
-    }
-    #[cfg(not(all(target_feature = "avx", target_feature = "fma")))]
-    {
-        let (a, b, c) = (a.to_array(), b.to_array(), c.to_array());
-        F32x8::new(std::array::from_fn(|i| a[i].mul_add(b[i], c[i])))
-    }
+    a.mul_add_lanes(b, c)
 }
 
 /// Lane-wise `a` with the sign of `sign`.
