@@ -286,7 +286,9 @@ impl Geometry {
         }
     }
 
-    /// One ray against the primitives of a leaf: lowers `best` where they hit nearer.
+    /// One ray against the primitives of a leaf: lowers `best` where they hit nearer. Triangle
+    /// leaves are tested here, inlined into the walk; sphere leaves out of line
+    /// ([`Geometry::closest_sphere_leaf`]).
     #[inline(always)]
     pub(super) fn closest_leaf(
         &self,
@@ -295,11 +297,11 @@ impl Geometry {
         tmin: f32,
         best: &mut Best,
     ) {
-        let (o, d) = (Vec3x4::splat(ray.origin), Vec3x4::splat(ray.dir));
-        let tmin4 = F32x4::splat(tmin);
-        let (first, blocks) = (leaf.first as usize, (leaf.count as usize).div_ceil(BLOCK));
         match PrimKind::from_tag(leaf.tag) {
             PrimKind::Triangle => {
+                let (o, d) = (Vec3x4::splat(ray.origin), Vec3x4::splat(ray.dir));
+                let tmin4 = F32x4::splat(tmin);
+                let (first, blocks) = (leaf.first as usize, (leaf.count as usize).div_ceil(BLOCK));
                 for b in &self.blocks.triangles[first..first + blocks] {
                     let (hit, t) = triangle_block(b, o, d, tmin4);
                     let hit = (hit & not_farther4(t, best)).bits();
@@ -308,6 +310,26 @@ impl Geometry {
                     }
                 }
             }
+            kind => self.closest_sphere_leaf(kind, leaf, ray, tmin, best),
+        }
+    }
+
+    /// [`Geometry::closest_leaf`] for a leaf of spheres (`kind`), out of line: inlined, its
+    /// per-ray constants (the splatted ray, `1 / (d . d)`) were hoisted into the start of every
+    /// single-ray walk, also of meshes without a sphere (PERF.md, sitting 27).
+    #[inline(never)]
+    fn closest_sphere_leaf(
+        &self,
+        kind: PrimKind,
+        leaf: crate::bvh::Leaf,
+        ray: &Ray,
+        tmin: f32,
+        best: &mut Best,
+    ) {
+        let (o, d) = (Vec3x4::splat(ray.origin), Vec3x4::splat(ray.dir));
+        let tmin4 = F32x4::splat(tmin);
+        let (first, blocks) = (leaf.first as usize, (leaf.count as usize).div_ceil(BLOCK));
+        match kind {
             PrimKind::Sphere => {
                 for b in &self.blocks.spheres[first..first + blocks] {
                     let (real, t0, t1) = sphere_block(b, o, d);
@@ -333,6 +355,7 @@ impl Geometry {
                     }
                 }
             }
+            PrimKind::Triangle => unreachable!("triangle leaves are tested inline"),
             PrimKind::Plane => unreachable!("planes are not in the BVH"),
         }
     }
