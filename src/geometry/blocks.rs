@@ -286,41 +286,14 @@ impl Geometry {
         }
     }
 
-    /// One ray against the primitives of a leaf: lowers `best` where they hit nearer. Triangle
-    /// leaves are tested here, inlined into the walk; sphere leaves out of line
-    /// ([`Geometry::closest_sphere_leaf`]).
-    #[inline(always)]
-    pub(super) fn closest_leaf(
-        &self,
-        leaf: crate::bvh::Leaf,
-        ray: &Ray,
-        tmin: f32,
-        best: &mut Best,
-    ) {
-        match PrimKind::from_tag(leaf.tag) {
-            PrimKind::Triangle => {
-                let (o, d) = (Vec3x4::splat(ray.origin), Vec3x4::splat(ray.dir));
-                let tmin4 = F32x4::splat(tmin);
-                let (first, blocks) = (leaf.first as usize, (leaf.count as usize).div_ceil(BLOCK));
-                for b in &self.blocks.triangles[first..first + blocks] {
-                    let (hit, t) = triangle_block(b, o, d, tmin4);
-                    let hit = (hit & not_farther4(t, best)).bits();
-                    if hit != 0 {
-                        take_lanes(hit, t, &b.prim, best);
-                    }
-                }
-            }
-            kind => self.closest_sphere_leaf(kind, leaf, ray, tmin, best),
-        }
-    }
-
-    /// [`Geometry::closest_leaf`] for a leaf of spheres (`kind`), out of line: inlined, its
+    /// One ray against the primitives of a leaf: lowers `best` where they hit nearer. Sphere
+    /// leaves are tested inline only when `SPHERES_INLINE`, else by a call
+    /// ([`Geometry::closest_sphere_leaf`]): inlined into a single-ray walk, the sphere test's
     /// per-ray constants (the splatted ray, `1 / (d . d)`) were hoisted into the start of every
-    /// single-ray walk, also of meshes without a sphere (PERF.md, sitting 27).
-    #[inline(never)]
-    fn closest_sphere_leaf(
+    /// walk, also of meshes without a sphere (PERF.md, sitting 27).
+    #[inline(always)]
+    pub(super) fn closest_leaf<const SPHERES_INLINE: bool>(
         &self,
-        kind: PrimKind,
         leaf: crate::bvh::Leaf,
         ray: &Ray,
         tmin: f32,
@@ -329,7 +302,17 @@ impl Geometry {
         let (o, d) = (Vec3x4::splat(ray.origin), Vec3x4::splat(ray.dir));
         let tmin4 = F32x4::splat(tmin);
         let (first, blocks) = (leaf.first as usize, (leaf.count as usize).div_ceil(BLOCK));
-        match kind {
+        match PrimKind::from_tag(leaf.tag) {
+            PrimKind::Triangle => {
+                for b in &self.blocks.triangles[first..first + blocks] {
+                    let (hit, t) = triangle_block(b, o, d, tmin4);
+                    let hit = (hit & not_farther4(t, best)).bits();
+                    if hit != 0 {
+                        take_lanes(hit, t, &b.prim, best);
+                    }
+                }
+            }
+            _ if !SPHERES_INLINE => self.closest_sphere_leaf(leaf, ray, tmin, best),
             PrimKind::Sphere => {
                 for b in &self.blocks.spheres[first..first + blocks] {
                     let (real, t0, t1) = sphere_block(b, o, d);
@@ -355,9 +338,14 @@ impl Geometry {
                     }
                 }
             }
-            PrimKind::Triangle => unreachable!("triangle leaves are tested inline"),
             PrimKind::Plane => unreachable!("planes are not in the BVH"),
         }
+    }
+
+    /// [`Geometry::closest_leaf`] of a sphere leaf, out of line (the single-ray walks' call).
+    #[inline(never)]
+    fn closest_sphere_leaf(&self, leaf: crate::bvh::Leaf, ray: &Ray, tmin: f32, best: &mut Best) {
+        self.closest_leaf::<true>(leaf, ray, tmin, best);
     }
 
     /// True if a primitive of the leaf lies on the ray in `(tmin, tmax)`.
@@ -419,7 +407,7 @@ impl Geometry {
                     t: ts[l],
                     prim: prims[l],
                 };
-                self.closest_leaf(leaf, &rays.ray(l), tmin[l], &mut best);
+                self.closest_leaf::<true>(leaf, &rays.ray(l), tmin[l], &mut best);
                 (ts[l], prims[l]) = (best.t, best.prim);
             }
             (*t, *prim) = (F32x8::new(ts), I32x8::new(prims));

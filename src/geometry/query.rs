@@ -130,7 +130,7 @@ impl Geometry {
             // registers around each leaf, about 40 instructions (PERF.md, sitting 20)
             #[inline(always)]
             |leaf, limit| {
-                self.closest_leaf(leaf, ray, tmin, best);
+                self.closest_leaf::<false>(leaf, ray, tmin, best);
                 *limit = best.t;
             },
             |leaf| self.prefetch_leaf(leaf),
@@ -157,7 +157,7 @@ impl Geometry {
             &mut limit,
             #[inline(always)]
             |leaf, limit| {
-                self.closest_leaf(leaf, ray, tmin, best);
+                self.closest_leaf::<false>(leaf, ray, tmin, best);
                 *limit = best.t;
             },
             |leaf| self.prefetch_leaf(leaf),
