@@ -95,7 +95,7 @@ fn render_scene(
             let geometry = pool.install(|| Geometry::from_scene(scene));
             let accel = AccelStats {
                 build: t0.elapsed(),
-                nodes: geometry.bvh().nodes.len(),
+                nodes: geometry.bvh().nodes().len(),
                 bounded: geometry.len() - geometry.planes.len(),
             };
             let mut frame = pool.install(|| render_packet(scene, &geometry, opts, progress))?;

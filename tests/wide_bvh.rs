@@ -100,7 +100,7 @@ fn edge_cases_validate() {
     let mut one = Geometry::default();
     push_triangle(&mut one, [Vec3::ZERO, Vec3::X, Vec3::Y]);
     let b = built(&one, &d);
-    assert!(b.bvh().root.is_leaf() && b.bvh().nodes.is_empty());
+    assert!(b.bvh().root().is_leaf() && b.bvh().nodes().is_empty());
     let mut one = Geometry::default();
     one.spheres.push(Vec3::ONE, 0.5, 0, 0);
     built(&one, &d);

@@ -146,7 +146,7 @@ fn build_timed<W: Write>(
             best = best.min(elapsed.as_secs_f64());
             geometry = Some(g);
         }
-        let nodes = geometry.as_ref().map_or(0, |g| g.bvh().nodes.len());
+        let nodes = geometry.as_ref().map_or(0, |g| g.bvh().nodes().len());
         out.build(scene, kernel, scene.primitive_count(), nodes, best)?;
     }
     geometry.ok_or_else(|| Error::Other("no repetition ran".to_string()))

@@ -258,11 +258,13 @@ pub fn build(
         pass,
     };
     let root = builder.subtree(&mut refs, rec, 1, &mut Bins::new());
-    Bvh8 {
+    let tree = Bvh8 {
         nodes: builder.nodes.into_vec(),
         root,
         bounds: padded(&rec.bounds.aabb()),
-    }
+    };
+    tree.check_references();
+    tree
 }
 
 /// A child being opened: its references' range and record; `open` until it is known not to

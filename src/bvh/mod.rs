@@ -141,13 +141,18 @@ pub struct Leaf {
     pub count: u32,
 }
 
-/// A child reference: an interior node's index, a leaf, or an empty slot. Bit 63 marks a leaf;
-/// a leaf keeps its tag in bits 56..63, its count in bits 32..56 and its first index in bits
-/// 0..32.
+/// A child reference: an interior node, a leaf, or an empty slot. Bit 63 marks a leaf; a leaf
+/// keeps its tag in bits 56..63, its count in bits 32..56 and its first index in bits 0..32. An
+/// interior node's reference is its byte offset in the tree's node array (its index times the
+/// 256 bytes of a [`Node8`]), so that a single-ray walk reaches its planes with one addressing
+/// mode ([`NodeRef::offset`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct NodeRef(u64);
 
 const LEAF_BIT: u64 = 1 << 63;
+
+/// An interior node's reference is its index shifted by this: the size of a [`Node8`].
+const NODE_SHIFT: u32 = 8;
 
 impl NodeRef {
     /// An unused child slot.
@@ -159,7 +164,7 @@ impl NodeRef {
     /// The interior node at `index`.
     #[inline(always)]
     pub fn node(index: u32) -> NodeRef {
-        NodeRef(index as u64)
+        NodeRef((index as u64) << NODE_SHIFT)
     }
 
     /// A leaf.
@@ -184,7 +189,13 @@ impl NodeRef {
     /// The interior node's index.
     #[inline(always)]
     pub fn index(self) -> usize {
-        self.0 as u32 as usize
+        (self.0 >> NODE_SHIFT) as usize
+    }
+
+    /// The interior node's byte offset in its tree's node array.
+    #[inline(always)]
+    pub fn offset(self) -> usize {
+        self.0 as usize
     }
 
     /// The leaf's contents.
@@ -314,7 +325,7 @@ pub struct Node8 {
     pub child: [NodeRef; WIDTH],
 }
 
-const _: () = assert!(std::mem::size_of::<Node8>() == 256);
+const _: () = assert!(std::mem::size_of::<Node8>() == 1 << NODE_SHIFT);
 
 impl Node8 {
     /// A node over `children` (at most [`WIDTH`]) and their (unpadded) boxes.
@@ -362,10 +373,15 @@ impl Node8 {
 
 /// An 8-wide BVH: interior nodes and the root reference (a leaf when everything fits in one).
 /// Empty when built over no primitive.
+///
+/// Every interior reference of a tree (the root and each node's children) names one of its
+/// nodes: the builder makes only such trees and checks it once more before handing one out
+/// (`Bvh8::check_references`), and the fields are private, so nothing changes a tree
+/// afterwards. The single-ray walks read nodes by that promise, without bounds checks.
 #[derive(Clone, Debug)]
 pub struct Bvh8 {
-    pub nodes: Vec<Node8>,
-    pub root: NodeRef,
+    nodes: Vec<Node8>,
+    root: NodeRef,
     /// The box of everything (padded like a child's).
     pub bounds: Aabb,
 }
@@ -454,6 +470,47 @@ impl Bvh8 {
             for k in [0, 2, 4] {
                 crate::simd::prefetch(&n.bounds[k]);
             }
+        }
+    }
+
+    /// The interior nodes.
+    pub fn nodes(&self) -> &[Node8] {
+        &self.nodes
+    }
+
+    /// The root reference: a leaf (or the empty slot) when the tree has no interior node.
+    pub fn root(&self) -> NodeRef {
+        self.root
+    }
+
+    /// Asserts that every interior reference names a node of the array: what
+    /// [`Bvh8::node_at`] relies on. One pass over the child references (the builder's last
+    /// step); a failure is a bug in the builder.
+    fn check_references(&self) {
+        let inside = |r: &NodeRef| r.is_leaf() || r.index() < self.nodes.len();
+        assert!(
+            inside(&self.root) && self.nodes.iter().all(|n| n.child.iter().all(inside)),
+            "a BVH node references a node outside its tree"
+        );
+    }
+
+    /// The interior node `r`, read without a bounds check.
+    ///
+    /// # Safety
+    ///
+    /// `r` is an interior reference of this tree: its root, or a child reference read from one
+    /// of its nodes ([`Bvh8::check_references`] has proved every such reference in bounds).
+    #[inline(always)]
+    unsafe fn node_at(&self, r: NodeRef) -> &Node8 {
+        debug_assert!(!r.is_leaf() && r.index() < self.nodes.len());
+        // SAFETY: `r.offset()` is `r.index()` nodes into the array, which holds that node
+        unsafe {
+            &*self
+                .nodes
+                .as_ptr()
+                .cast::<u8>()
+                .add(r.offset())
+                .cast::<Node8>()
         }
     }
 
@@ -581,7 +638,7 @@ impl Bvh8 {
 
 #[cfg(test)]
 mod tests {
-    use super::{ROBUST, widen, widen8};
+    use super::{Aabb, Bvh8, Node8, NodeRef, ROBUST, widen, widen8};
     use crate::bvh::test_rng::Rng;
     use crate::simd::{F32x8, lanes};
 
@@ -625,5 +682,36 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A node's reference is its index shifted to a byte offset, both ways, for every index a
+    /// builder can hand out.
+    #[test]
+    fn a_node_reference_is_its_byte_offset() {
+        for i in [0, 1, 2, 255, 256, 70_263, u32::MAX - 1, u32::MAX] {
+            let r = NodeRef::node(i);
+            assert!(!r.is_leaf() && !r.is_empty());
+            assert_eq!(r.index(), i as usize);
+            assert_eq!(r.offset(), i as usize * size_of::<Node8>());
+        }
+    }
+
+    /// The check the walks' unchecked reads rest on refuses a tree whose node names a node past
+    /// the array's end, or whose root does.
+    #[test]
+    fn a_reference_outside_the_tree_is_refused() {
+        let unit = Aabb {
+            min: crate::math::Vec3::ZERO,
+            max: crate::math::Vec3::ONE,
+        };
+        let tree = |child: NodeRef, root: NodeRef| Bvh8 {
+            nodes: vec![Node8::new(&[(child, unit)])],
+            root,
+            bounds: unit,
+        };
+        let checked = |t: Bvh8| std::panic::catch_unwind(move || t.check_references()).is_ok();
+        assert!(checked(tree(NodeRef::EMPTY, NodeRef::node(0))));
+        assert!(!checked(tree(NodeRef::node(1), NodeRef::node(0))));
+        assert!(!checked(tree(NodeRef::EMPTY, NodeRef::node(1))));
     }
 }

@@ -89,16 +89,50 @@ impl Ray1 {
         tmin: F32x8,
         tmax: F32x8,
     ) -> (u32, F32x8) {
+        let plane = |p: Plane, _: usize| n.bounds[p as usize];
+        self.test_planes::<FORWARD>(plane, plane, tmin, tmax)
+    }
+
+    /// [`Ray1::test`] of the interior node `r`, its planes read at `r`'s byte offset from
+    /// `bases` (made for this ray): the same bits.
+    ///
+    /// # Safety
+    ///
+    /// `r` is an interior reference of the tree `bases` was made from ([`Bvh8::node_at`]).
+    #[inline(always)]
+    unsafe fn test_at<const FORWARD: bool>(
+        &self,
+        bases: &PlaneBases,
+        r: NodeRef,
+        tmin: F32x8,
+        tmax: F32x8,
+    ) -> (u32, F32x8) {
+        // SAFETY: the caller's promise
+        let entry = |_: Plane, axis: usize| unsafe { bases.entry(r, axis) };
+        let exit = |_: Plane, axis: usize| unsafe { bases.exit(r, axis) };
+        self.test_planes::<FORWARD>(entry, exit, tmin, tmax)
+    }
+
+    /// The arithmetic of [`Ray1::test`] on planes read by `entry_plane` (the ray's entry planes,
+    /// by plane and axis) and `exit_plane`.
+    #[inline(always)]
+    fn test_planes<const FORWARD: bool>(
+        &self,
+        entry_plane: impl Fn(Plane, usize) -> F32x8,
+        exit_plane: impl Fn(Plane, usize) -> F32x8,
+        tmin: F32x8,
+        tmax: F32x8,
+    ) -> (u32, F32x8) {
         let entry = |plane: Plane, axis: usize| {
             fused_mul_add(
-                n.bounds[plane as usize],
+                entry_plane(plane, axis),
                 self.inv[axis],
                 self.neg_oi_near[axis],
             )
         };
         let exit = |plane: Plane, axis: usize| {
             fused_mul_add(
-                n.bounds[plane as usize],
+                exit_plane(plane, axis),
                 self.inv_exit[axis],
                 self.neg_oi_far[axis],
             )
@@ -112,6 +146,52 @@ impl Ray1 {
         let (enter, near) =
             slab_octant::<FORWARD, FORWARD>(entry, exit, &self.near, &self.far, tmin, tmax);
         (bitmask(enter), near)
+    }
+}
+
+/// One ray's entry and exit planes located in one tree's node array: the array's start moved by
+/// each plane's place in a node, so that a node's plane lies at the node's byte offset from it
+/// ([`NodeRef::offset`]). A walk then reads a plane in one addressing mode, where indexing the
+/// array put a shift and an addition on the chain of dependent loads from one node to the next
+/// (PERF.md, sitting 29).
+struct PlaneBases {
+    near: [*const u8; 3],
+    far: [*const u8; 3],
+}
+
+impl PlaneBases {
+    /// The bases of `r`'s planes in `tree`.
+    #[inline(always)]
+    fn new(tree: &Bvh8, r: &Ray1) -> PlaneBases {
+        let start = tree.nodes.as_ptr().cast::<u8>();
+        // wrapping: an empty tree's array has no bytes to point into (and no walk reads it)
+        let at = |p: Plane| start.wrapping_add(p as usize * std::mem::size_of::<F32x8>());
+        PlaneBases {
+            near: r.near.map(at),
+            far: r.far.map(at),
+        }
+    }
+
+    /// The ray's entry plane on `axis` of the interior node `r`.
+    ///
+    /// # Safety
+    ///
+    /// `r` is an interior reference of the tree these bases were made from ([`Bvh8::node_at`]).
+    #[inline(always)]
+    unsafe fn entry(&self, r: NodeRef, axis: usize) -> F32x8 {
+        // SAFETY: `r`'s node lies in the array, a plane 32-byte aligned inside its 256 bytes
+        unsafe { *self.near[axis].add(r.offset()).cast::<F32x8>() }
+    }
+
+    /// The ray's exit plane on `axis` of the interior node `r`.
+    ///
+    /// # Safety
+    ///
+    /// As [`PlaneBases::entry`].
+    #[inline(always)]
+    unsafe fn exit(&self, r: NodeRef, axis: usize) -> F32x8 {
+        // SAFETY: as in `entry`
+        unsafe { *self.far[axis].add(r.offset()).cast::<F32x8>() }
     }
 }
 
@@ -382,6 +462,7 @@ impl Bvh8 {
             return;
         }
         let tmin8 = F32x8::splat(tmin);
+        let bases = PlaneBases::new(self, r);
         let mut stack: Stack<(NodeRef, f32), STACK> = Stack::new();
         let Some(mut cur) = start(&mut stack) else {
             return;
@@ -391,8 +472,9 @@ impl Bvh8 {
                 leaf(cur.as_leaf(), tmax);
                 None
             } else {
-                let node = &self.nodes[cur.index()];
-                self.descend::<FORWARD>(r, node, tmin8, *tmax, &mut stack, touch)
+                // SAFETY: `cur` is the root or a child reference read from this tree's nodes
+                // (by `start`, `descend` or through the stack they fill)
+                unsafe { self.descend::<FORWARD>(r, &bases, cur, tmin8, *tmax, &mut stack, touch) }
             };
             cur = match next {
                 Some(c) => c,
@@ -404,21 +486,31 @@ impl Bvh8 {
         }
     }
 
-    /// One step down from interior node `n` for a closest-hit walk: the nearest child the ray
-    /// enters before `tmax`, the other entered children pushed farthest first; `None` when it
-    /// enters none. Pushed interior nodes are prefetched here, pushed leaves by `touch`.
+    /// One step down from interior node `cur` for a closest-hit walk: the nearest child the
+    /// ray enters before `tmax`, the other entered children pushed farthest first; `None` when
+    /// it enters none. Pushed interior nodes are prefetched here, pushed leaves by `touch`.
+    ///
+    /// # Safety
+    ///
+    /// `cur` is an interior reference of this tree ([`Bvh8::node_at`]), `bases` made from it
+    /// for `r`.
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn descend<const FORWARD: bool>(
+    unsafe fn descend<const FORWARD: bool>(
         &self,
         r: &Ray1,
-        n: &Node8,
+        bases: &PlaneBases,
+        cur: NodeRef,
         tmin8: F32x8,
         tmax: f32,
         stack: &mut Stack<(NodeRef, f32), STACK>,
         touch: &impl Fn(Leaf),
     ) -> Option<NodeRef> {
-        let (mask, near) = r.test::<FORWARD>(n, tmin8, F32x8::splat(tmax));
+        // SAFETY: the caller's promise
+        let (mask, near) = unsafe { r.test_at::<FORWARD>(bases, cur, tmin8, F32x8::splat(tmax)) };
         let near = near.to_array();
+        // SAFETY: the caller's promise
+        let n = unsafe { self.node_at(cur) };
         self.enter(n, mask, |c| near[c], stack, touch)
     }
 
@@ -502,6 +594,7 @@ impl Bvh8 {
             return false;
         }
         let r = Ray1::new::<FORWARD>(ray);
+        let bases = PlaneBases::new(self, &r);
         let (tmin8, tmax8) = (F32x8::splat(tmin), F32x8::splat(tmax));
         let mut stack: Stack<NodeRef, STACK> = Stack::new();
         let mut cur = self.root;
@@ -511,8 +604,10 @@ impl Bvh8 {
                     return true;
                 }
             } else {
-                let n = &self.nodes[cur.index()];
-                let (mut mask, _) = r.test::<FORWARD>(n, tmin8, tmax8);
+                // SAFETY: `cur` is the root or a child reference read from this tree's nodes
+                // (here or through the stack)
+                let (mut mask, _) = unsafe { r.test_at::<FORWARD>(&bases, cur, tmin8, tmax8) };
+                let n = unsafe { self.node_at(cur) };
                 if mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -593,7 +688,8 @@ fn sort_keys_descending(k: &mut [u64]) {
 
 #[cfg(test)]
 mod tests {
-    use super::{Ray1, Ray1x8};
+    use super::{PlaneBases, Ray1, Ray1x8};
+    use crate::bvh::build::{BuildSettings, LeafSink, build};
     use crate::bvh::test_rng::Rng;
     use crate::bvh::{Aabb, Node8, NodeRef, WIDTH};
     use crate::math::{Ray, Vec3};
@@ -869,5 +965,79 @@ mod tests {
             met > 40_000 && grazed > 10_000 && forward > 10_000,
             "{met} boxes met, {grazed} grazed, {forward} forward rays"
         );
+    }
+
+    /// A sink that stores nothing (the walks below never reach a leaf's contents).
+    struct NoSink;
+
+    impl LeafSink for NoSink {
+        fn leaf(&self, _tag: u8, _prims: &[u32]) -> u32 {
+            0
+        }
+    }
+
+    /// The walks' unchecked reads find what indexing finds: every node of a built tree, read at
+    /// its reference's byte offset, is the node at its index, and the test of its planes through
+    /// a ray's plane bases gives the bits of the test of the indexed node, for rays of every
+    /// octant, forward or not.
+    #[test]
+    fn a_node_read_at_its_offset_is_the_node_at_its_index() {
+        let mut rng = Rng(0x5851_f42d);
+        let boxes: Vec<Aabb> = (0..3000)
+            .map(|_| {
+                let c: [f32; 3] = std::array::from_fn(|_| rng.range64(-10.0, 10.0) as f32);
+                let h = rng.range64(0.01, 0.5) as f32;
+                Aabb {
+                    min: Vec3::from_array(c) - Vec3::splat(h),
+                    max: Vec3::from_array(c) + Vec3::splat(h),
+                }
+            })
+            .collect();
+        let tree = build(
+            boxes.len(),
+            |i| (boxes[i], 0),
+            &BuildSettings::default(),
+            &NoSink,
+        );
+        assert!(tree.nodes.len() > 50, "{} nodes", tree.nodes.len());
+        for case in 0..64 {
+            let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-12.0, 12.0) as f32));
+            let d = Vec3::from_array(std::array::from_fn(|_| rng.range64(-1.0, 1.0) as f32));
+            let ray = Ray::new(o, d.normalize_or(Vec3::Y));
+            let (t0, t1) = (
+                F32x8::splat([0.0, 1e-4, -1.0][case % 3]),
+                F32x8::splat(30.0),
+            );
+            let (general, forward) = (Ray1::new::<false>(&ray), Ray1::new::<true>(&ray));
+            let (gb, fb) = (
+                PlaneBases::new(&tree, &general),
+                PlaneBases::new(&tree, &forward),
+            );
+            for (i, n) in tree.nodes.iter().enumerate() {
+                let r = NodeRef::node(i as u32);
+                assert_eq!(r.index(), i);
+                assert_eq!(r.offset(), i * size_of::<Node8>());
+                // SAFETY: `r` names node `i` of `tree`, the tree the bases were made from
+                let (at, read) =
+                    unsafe { (general.test_at::<false>(&gb, r, t0, t1), tree.node_at(r)) };
+                assert!(std::ptr::eq(read, n));
+                let by_index = general.test::<false>(n, t0, t1);
+                assert_eq!(at.0, by_index.0);
+                assert_eq!(
+                    at.1.to_array().map(f32::to_bits),
+                    by_index.1.to_array().map(f32::to_bits)
+                );
+                if case % 3 != 2 {
+                    // SAFETY: as above
+                    let at = unsafe { forward.test_at::<true>(&fb, r, t0, t1) };
+                    let by_index = forward.test::<true>(n, t0, t1);
+                    assert_eq!(at.0, by_index.0);
+                    assert_eq!(
+                        at.1.to_array().map(f32::to_bits),
+                        by_index.1.to_array().map(f32::to_bits)
+                    );
+                }
+            }
+        }
     }
 }

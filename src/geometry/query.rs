@@ -242,7 +242,7 @@ impl Geometry {
     /// more, fell behind one walk at a time on torus1m when single rays came to be prepared a
     /// packet at a time, and were removed: PERF.md, sitting 20.)
     pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
-        let nodes = self.bvh.nodes.len();
+        let nodes = self.bvh.nodes().len();
         if coherent(rays, COHERENT_COS) {
             Path::Stream
         } else if nodes < SMALL_TREE_NODES {
