@@ -159,6 +159,9 @@ struct PlaneBases {
     far: [*const u8; 3],
 }
 
+// a node's planes start it, 32 bytes each, in `Plane` order: what `PlaneBases::new` counts on
+const _: () = assert!(std::mem::offset_of!(Node8, bounds) == 0);
+
 impl PlaneBases {
     /// The bases of `r`'s planes in `tree`.
     #[inline(always)]
@@ -607,6 +610,7 @@ impl Bvh8 {
                 // SAFETY: `cur` is the root or a child reference read from this tree's nodes
                 // (here or through the stack)
                 let (mut mask, _) = unsafe { r.test_at::<FORWARD>(&bases, cur, tmin8, tmax8) };
+                // SAFETY: as above
                 let n = unsafe { self.node_at(cur) };
                 if mask != 0 {
                     let i = mask.trailing_zeros() as usize;
