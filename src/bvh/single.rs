@@ -1017,6 +1017,7 @@ mod tests {
                 PlaneBases::new(&tree, &general),
                 PlaneBases::new(&tree, &forward),
             );
+            let bits = |(mask, near): (u32, F32x8)| (mask, near.to_array().map(f32::to_bits));
             for (i, n) in tree.nodes.iter().enumerate() {
                 let r = NodeRef::node(i as u32);
                 assert_eq!(r.index(), i);
@@ -1025,21 +1026,11 @@ mod tests {
                 let (at, read) =
                     unsafe { (general.test_at::<false>(&gb, r, t0, t1), tree.node_at(r)) };
                 assert!(std::ptr::eq(read, n));
-                let by_index = general.test::<false>(n, t0, t1);
-                assert_eq!(at.0, by_index.0);
-                assert_eq!(
-                    at.1.to_array().map(f32::to_bits),
-                    by_index.1.to_array().map(f32::to_bits)
-                );
+                assert_eq!(bits(at), bits(general.test::<false>(n, t0, t1)));
                 if case % 3 != 2 {
                     // SAFETY: as above
                     let at = unsafe { forward.test_at::<true>(&fb, r, t0, t1) };
-                    let by_index = forward.test::<true>(n, t0, t1);
-                    assert_eq!(at.0, by_index.0);
-                    assert_eq!(
-                        at.1.to_array().map(f32::to_bits),
-                        by_index.1.to_array().map(f32::to_bits)
-                    );
+                    assert_eq!(bits(at), bits(forward.test::<true>(n, t0, t1)));
                 }
             }
         }
