@@ -31,7 +31,7 @@ pub const BLOCK: usize = 4;
 /// A leaf visited by this many lanes of a packet or fewer is tested lane by lane with the
 /// 4-wide block kernel rather than primitive by primitive on all 8 lanes (measured on the tori's
 /// streams: PERF.md §10, "What was tried (figures from the branch's development)"; on the
-/// spheres' incoherent packets 3 and 4 were slower and 0 or 1 no faster, sitting 31).
+/// spheres' incoherent packets 3 and 4 were slower, 0 and 1 within the noise: sitting 31).
 pub const FEW_LANES: u32 = 2;
 
 /// The geometry index of an unused lane.
