@@ -108,8 +108,8 @@ impl Ray1 {
         tmax: F32x8,
     ) -> (u32, F32x8) {
         // SAFETY: the caller's promise
-        let entry = |_: Plane, axis: usize| unsafe { bases.entry(r, axis) };
-        let exit = |_: Plane, axis: usize| unsafe { bases.exit(r, axis) };
+        let entry = |_: Plane, axis: usize| unsafe { PlaneBases::plane(bases.near[axis], r) };
+        let exit = |_: Plane, axis: usize| unsafe { PlaneBases::plane(bases.far[axis], r) };
         self.test_planes::<FORWARD>(entry, exit, tmin, tmax)
     }
 
@@ -175,26 +175,17 @@ impl PlaneBases {
         }
     }
 
-    /// The ray's entry plane on `axis` of the interior node `r`.
+    /// The plane of the interior node `r` read through `base`, one of these bases: the ray's
+    /// entry plane on an axis (`near[axis]`) or its exit plane (`far[axis]`).
     ///
     /// # Safety
     ///
-    /// `r` is an interior reference of the tree these bases were made from ([`Bvh8::node_at`]).
+    /// `base` is one of these bases and `r` an interior reference of the tree they were made
+    /// from ([`Bvh8::node_at`]).
     #[inline(always)]
-    unsafe fn entry(&self, r: NodeRef, axis: usize) -> F32x8 {
+    unsafe fn plane(base: *const u8, r: NodeRef) -> F32x8 {
         // SAFETY: `r`'s node lies in the array, a plane 32-byte aligned inside its 256 bytes
-        unsafe { *self.near[axis].add(r.offset()).cast::<F32x8>() }
-    }
-
-    /// The ray's exit plane on `axis` of the interior node `r`.
-    ///
-    /// # Safety
-    ///
-    /// As [`PlaneBases::entry`].
-    #[inline(always)]
-    unsafe fn exit(&self, r: NodeRef, axis: usize) -> F32x8 {
-        // SAFETY: as in `entry`
-        unsafe { *self.far[axis].add(r.offset()).cast::<F32x8>() }
+        unsafe { *base.add(r.offset()).cast::<F32x8>() }
     }
 }
 
