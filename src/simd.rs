@@ -287,6 +287,54 @@ fn prefetch_address(p: *const i8) {
     let _ = p;
 }
 
+/// The lanes of `src` whose bit is set in `bits` (bit `k` = lane `k`, only the low 8 read),
+/// moved to the front in lane order; the lanes after them are unspecified. A caller stores all
+/// 8 and advances by `bits.count_ones()` (stream compaction: one permutation, where a lane at a
+/// time took a branch per lane).
+#[inline(always)]
+pub fn compact_lanes(src: [u32; LANES], bits: u32) -> [u32; LANES] {
+    let order = &COMPACT_ORDER[(bits & 0xff) as usize];
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    {
+        use std::arch::x86_64::{
+            __m256i, _mm_loadl_epi64, _mm256_cvtepu8_epi32, _mm256_loadu_si256,
+            _mm256_permutevar8x32_epi32, _mm256_storeu_si256,
+        };
+        let mut out = [0u32; LANES];
+        // SAFETY: AVX2 is enabled at compile time (the cfg above); the loads read the 32 bytes
+        // of `src` and the 8 of `order`, the store writes the 32 of `out`
+        unsafe {
+            let v = _mm256_loadu_si256(src.as_ptr().cast::<__m256i>());
+            let idx = _mm256_cvtepu8_epi32(_mm_loadl_epi64(order.as_ptr().cast()));
+            let packed = _mm256_permutevar8x32_epi32(v, idx);
+            _mm256_storeu_si256(out.as_mut_ptr().cast::<__m256i>(), packed);
+        }
+        out
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    {
+        std::array::from_fn(|k| src[order[k] as usize])
+    }
+}
+
+/// `COMPACT_ORDER[bits]`: the set bits of `bits`, lowest first, then zeros.
+static COMPACT_ORDER: [[u8; LANES]; 256] = {
+    let mut table = [[0u8; LANES]; 256];
+    let mut bits = 0;
+    while bits < 256 {
+        let (mut lane, mut k) = (0, 0);
+        while lane < LANES {
+            if bits >> lane & 1 == 1 {
+                table[bits][k] = lane as u8;
+                k += 1;
+            }
+            lane += 1;
+        }
+        bits += 1;
+    }
+    table
+};
+
 /// The smallest lane (for lanes without NaN).
 #[inline(always)]
 pub fn reduce_min(a: F32x8) -> f32 {
@@ -549,6 +597,21 @@ impl<T: Simd> Neg for Vec3v<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn compact_lanes_keeps_the_chosen_lanes_in_order() {
+        let src: [u32; LANES] = std::array::from_fn(|k| 100 + k as u32);
+        for bits in 0..256u32 {
+            let want: Vec<u32> = (0..LANES)
+                .filter(|&k| bits >> k & 1 == 1)
+                .map(|k| src[k])
+                .collect();
+            let got = compact_lanes(src, bits);
+            assert_eq!(&got[..want.len()], &want[..], "bits {bits:08b}");
+        }
+        // bits above the eighth are ignored
+        assert_eq!(compact_lanes(src, 0x102)[0], 101);
+    }
 
     #[test]
     fn lanes_round_trip() {
