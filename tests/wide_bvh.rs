@@ -2,7 +2,8 @@
 //! builder setting and on the edge cases (one primitive, every primitive at one point, flat
 //! scenes, more primitives than a leaf may hold at one point), leaf blocks with partly filled
 //! lanes report only their own primitives, and every path through the tree (single rays, 8-ray
-//! packets, streams of packets, the per-group choice) gives the same `(t, primitive)` bit for
+//! packets, streams of packets, lists of rays going down together, the per-group choice over
+//! batches of many groups) gives the same `(t, primitive)` bit for
 //! bit on the same rays, ties in `t` included, and leaves a lane's hit as it was where nothing
 //! in the tree beats it.
 
@@ -11,7 +12,7 @@ mod common;
 use common::Rng;
 use whitted::bvh::MAX_STREAM;
 use whitted::bvh::build::BuildSettings;
-use whitted::geometry::{Geometry, Path};
+use whitted::geometry::{Geometry, LIST_PACKETS, Path, SMALL_TREE_NODES};
 use whitted::math::{Ray, Vec3};
 use whitted::packet::{HitPacket, RayPacket};
 use whitted::simd::{
@@ -413,6 +414,71 @@ fn lanes_with_a_nearer_hit_keep_it_on_every_path() {
                     );
                 }
             }
+        }
+    }
+}
+
+/// A batch of many groups in a tree big enough for the lists ([`SMALL_TREE_NODES`] interior
+/// nodes or more), more packets than [`LIST_PACKETS`]: the incoherent groups go down the tree
+/// as lists, a first run of them when [`LIST_PACKETS`] wait and the rest at the end, among
+/// streams, lanes behind their origin and inactive lanes; every lane gets the single-ray walk's
+/// `(t, primitive)` bit for bit (or keeps its own hit where nothing beats it), and inactive
+/// lanes are untouched.
+#[test]
+fn a_batch_of_many_groups_takes_the_lists_and_agrees_with_single_rays() {
+    let mut rng = Rng::new(13);
+    let s = BuildSettings {
+        min_leaf: 1,
+        max_leaf: 4,
+        ..BuildSettings::default()
+    };
+    let g = built(&soup(&mut rng, 12_000), &s);
+    assert!(
+        g.bvh().nodes().len() >= SMALL_TREE_NODES,
+        "a tree too small for the lists"
+    );
+    let groups = ray_groups(&mut rng, LIST_PACKETS / MAX_STREAM + 90);
+    let listed = groups
+        .iter()
+        .filter(|r| g.choose_path(r) == Path::Lists)
+        .count();
+    assert!(
+        listed * MAX_STREAM > LIST_PACKETS,
+        "{listed} groups on the lists"
+    );
+    let rays: Vec<RayPacket> = groups.concat();
+    const KEPT: i32 = 7_000_000;
+    let start: Vec<HitPacket> = rays
+        .iter()
+        .map(|_| {
+            let t: [f32; LANES] = std::array::from_fn(|_| match rng.below(3) {
+                0 => 0.25,
+                1 => rng.range(1.0, 30.0),
+                _ => f32::INFINITY,
+            });
+            let prim = t.map(|t| if t.is_finite() { KEPT } else { -1 });
+            HitPacket {
+                t: from_lanes(t),
+                prim: I32x8::new(prim),
+            }
+        })
+        .collect();
+    let mut hits = start.clone();
+    g.closest_hit_batch(&rays, &mut hits);
+    for (k, ((h, p), h0)) in hits.iter().zip(&rays).zip(&start).enumerate() {
+        let (t, prim) = (lanes(h.t), lanes_i32(h.prim));
+        let (t0, p0) = (lanes(h0.t), lanes_i32(h0.prim));
+        let (tmin, bits) = (lanes(p.tmin), bitmask(p.active));
+        for l in 0..LANES {
+            let want = match g.closest_hit(&p.ray(l), tmin[l], t0[l]) {
+                Some((t, prim)) if bits >> l & 1 == 1 => (t, prim as i32),
+                _ => (t0[l], p0[l]),
+            };
+            assert_eq!(
+                (t[l].to_bits(), prim[l]),
+                (want.0.to_bits(), want.1),
+                "packet {k} lane {l}"
+            );
         }
     }
 }

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::queues::{BenchPacket, BenchRay, PacketQueue, RayQueue};
 use crate::bvh::MAX_STREAM;
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, ListBatch};
 use crate::packet::{HitPacket, NO_HIT, RayPacket};
 use crate::simd::{F32x8, Mask, bitmask, lanes, lanes_i32, mask_none, prefetch_all};
 
@@ -105,9 +105,9 @@ fn gather(packets: &[BenchPacket]) -> ([RayPacket; MAX_STREAM], [F32x8; MAX_STRE
     (rays, tmax)
 }
 
-/// The closest hits of 8 rays, the path the renderer uses: groups of up to [`MAX_STREAM`]
-/// packets through [`Geometry::closest_hit_batch`] (a stream where the rays are coherent,
-/// single rays where they are not).
+/// The closest hits of 8 rays, the path the renderer uses: [`Geometry::closest_hit_group`]
+/// (groups of [`MAX_STREAM`] packets as streams where the rays are coherent, the incoherent
+/// groups of big trees together as lists).
 pub struct ClosestPacket;
 
 impl Kernel for ClosestPacket {
@@ -124,15 +124,18 @@ impl Kernel for ClosestPacket {
     }
     #[inline(always)]
     fn trace_many(geometry: &Geometry, items: &[BenchPacket], hits: &mut [HitPacket]) {
-        for (g, (p, h)) in items
-            .chunks(MAX_STREAM)
-            .zip(hits.chunks_mut(MAX_STREAM))
-            .enumerate()
-        {
-            prefetch_group(items, g + 1);
-            let (rays, _) = gather(p);
-            geometry.closest_hit_batch(&rays[..p.len()], h);
-        }
+        ListBatch::with(|lists| {
+            for first in (0..items.len()).step_by(MAX_STREAM) {
+                prefetch_group(items, first / MAX_STREAM + 1);
+                let group = first..(first + MAX_STREAM).min(items.len());
+                let (rays, _) = gather(&items[group.clone()]);
+                let (rays, h) = (&rays[..group.len()], &mut hits[group]);
+                if !geometry.closest_hit_group(first, rays, h, lists) && lists.is_full() {
+                    geometry.closest_hit_waiting(lists, |k, hit| hits[k] = hit);
+                }
+            }
+            geometry.closest_hit_waiting(lists, |k, hit| hits[k] = hit);
+        });
     }
     fn count(hit: &HitPacket, tally: &mut Tally) {
         for (t, prim) in lanes(hit.t).into_iter().zip(lanes_i32(hit.prim)) {

@@ -19,10 +19,13 @@
 //!                [`Bvh8::closest_packet_probed`] reports each node to a [`TraversalProbe`],
 //!                the cost heatmap's counter)
 //!     stream.rs  several packets sharing one frustum                  (camera and shadow rays)
+//!     lists.rs   many rays going down together as lists of ray ids,   (incoherent rays of
+//!                each node splitting its list among its children       big trees)
 //! ```
 
 pub mod arena;
 pub mod build;
+mod lists;
 mod packet;
 mod single;
 mod stack;
@@ -31,6 +34,7 @@ mod stream;
 #[cfg(test)]
 mod test_rng;
 
+pub use lists::ListScratch;
 pub use packet::PACKET_STACK_DEPTH;
 pub use single::{Entered, Ray1x8};
 pub use stream::{MAX_STREAM, StreamMasks};

@@ -4,7 +4,8 @@
 //! [`Ray1x8`] prepares a packet's 8 rays for their walks at once, and also tests one child
 //! against all 8 lanes by the same arithmetic, each lane in its own octant (the packet walk's
 //! test for incoherent packets, `packet.rs`), or a whole node: the root, whose test is the
-//! first step of every lane's walk ([`Entered`]).
+//! first step of every lane's walk ([`Entered`]), or one lane against a whole node where it lies
+//! in the packet (the breadth-first lists' test, `lists.rs`).
 
 use super::stack::Stack;
 use super::{
@@ -287,6 +288,38 @@ impl Ray1x8 {
             by_lane: transpose_bits8x8(by_child),
             near,
         }
+    }
+
+    /// The children of `n` lane `l` enters within `(tmin, tmax)` (bit `i` = child `i`): the
+    /// mask of lane `l`'s [`Ray1::test`] (the same bits), its values read where they lie in the
+    /// packet and its planes picked by its octant at each call. The test of the breadth-first
+    /// lists (`lists.rs`), which take each ray once per node it visits, in any order, so prepare
+    /// no ray for a walk of its own.
+    #[inline(always)]
+    pub(super) fn test_lane(&self, l: usize, n: &Node8, tmin: f32, tmax: f32) -> u32 {
+        let lane = |v: &[F32x8; 3], a: usize| F32x8::splat(v[a].as_array()[l]);
+        // the entry plane of axis `a` is its upper one where the lane's direction is negative
+        let down = |a: usize| (self.down[a] >> l & 1) as usize;
+        let entry = |_: Plane, a: usize| {
+            let plane = n.bounds[LO + a + (HI - LO) * down(a)];
+            fused_mul_add(plane, lane(&self.inv, a), lane(&self.neg_oi_near, a))
+        };
+        let exit = |_: Plane, a: usize| {
+            let plane = n.bounds[HI + a - (HI - LO) * down(a)];
+            fused_mul_add(plane, lane(&self.inv_exit, a), lane(&self.neg_oi_far, a))
+        };
+        // the planes are the lane's own (the closures ignore the octant's)
+        let any_octant = Plane::ENTRY_OF_OCTANT[0];
+        let tmax = F32x8::splat(tmax) * F32x8::splat(ROBUST);
+        let (enter, _) = slab_octant::<true, true>(
+            entry,
+            exit,
+            &any_octant,
+            &any_octant,
+            F32x8::splat(tmin),
+            tmax,
+        );
+        bitmask(enter)
     }
 
     /// Lane `l` as a forward ray for [`Ray1::test`].
@@ -787,6 +820,12 @@ mod tests {
                         "case {case}, child {i}, lane {l}"
                     );
                     assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
+                    // one lane read in place (the breadth-first lists' test)
+                    assert_eq!(
+                        prepared.test_lane(l, &n, tmin[l], tmax[l]),
+                        m1,
+                        "case {case}"
+                    );
                     // the whole node at once: lane l's byte and its row of distances
                     assert_eq!(node.mask(l), m1, "case {case}");
                     assert_eq!(node.near[i][l].to_bits(), n1.to_array()[i].to_bits());

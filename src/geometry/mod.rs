@@ -36,7 +36,7 @@ use crate::scene::normals::interpolate;
 use crate::scene::{Object, Scene};
 use blocks::{BLOCK, BlockSink, Blocks};
 use normals::CornerNormals;
-pub use query::{COHERENT_COS, Path, SMALL_TREE_NODES, coherent};
+pub use query::{COHERENT_COS, LIST_PACKETS, ListBatch, Path, SMALL_TREE_NODES, coherent};
 pub use soa::{PlaneSoa, SphereSoa, TransformedSphereSoa, TriangleSoa};
 
 /// The most primitives a leaf holds in a tree with spheres (the builder's default, 12, is for

@@ -1,17 +1,18 @@
 //! The geometry's ray queries: closest hit and any hit, for one ray (through the BVH one ray at
-//! a time, 8 children per pass, leaf blocks 4 primitives per pass), for an 8-ray packet, and
-//! for a stream of packets that share one frustum; plus [`Geometry::closest_hit_batch`] and
-//! [`Geometry::occluded_batch`], which pick among them per group of packets by how coherent the
-//! rays are and how big the tree is ([`Geometry::choose_path`], the rule the wavefront and
-//! `whitted bench` use). Planes are tested after the BVH.
+//! a time, 8 children per pass, leaf blocks 4 primitives per pass), for an 8-ray packet, for a
+//! stream of packets that share one frustum, and (closest hit) for many rays going down the tree
+//! together as lists; plus [`Geometry::closest_hit_batch`] and [`Geometry::occluded_batch`],
+//! which pick among them per group of packets by how coherent the rays are and how big the tree
+//! is ([`Geometry::choose_path`], the rule the wavefront and `whitted bench` use). Planes are
+//! tested after the BVH.
 //!
 //! Every closest-hit query reports the nearest hit in `(tmin, tmax)`, ties in `t` going to the
-//! smaller geometry index, so single rays, packets and streams give the same `(t, prim)` bit for
-//! bit. Packet queries never touch inactive lanes.
+//! smaller geometry index, so single rays, packets, streams and lists give the same
+//! `(t, prim)` bit for bit. Packet queries never touch inactive lanes.
 
 use super::blocks::Best;
 use super::{Geometry, PrimKind};
-use crate::bvh::{Entered, MAX_STREAM, Ray1x8};
+use crate::bvh::{Entered, ListScratch, MAX_STREAM, Ray1x8};
 use crate::intersect::sphere::affine_packet;
 use crate::intersect::sphere::sphere_lanes;
 use crate::intersect::{
@@ -34,11 +35,69 @@ pub enum Path {
     Packet,
     /// Ray by ray, one walk at a time ([`Geometry::closest_hit`]).
     Single,
+    /// The rays of every group on this path in one batch together, as lists of rays that go
+    /// down the tree breadth first ([`Geometry::closest_hit_lists`]; any-hit rays go ray by
+    /// ray, as [`Path::Single`]).
+    Lists,
 }
 
 impl Path {
     /// Every path, for tests that hold them to one another.
-    pub const ALL: [Path; 3] = [Path::Stream, Path::Packet, Path::Single];
+    pub const ALL: [Path; 4] = [Path::Stream, Path::Packet, Path::Single, Path::Lists];
+}
+
+/// The packets of [`Path::Lists`] that wait for one another before they go down the tree
+/// together (32,768 rays): the more rays a list starts with, the more of them share each node
+/// and leaf (PERF.md, sitting 32).
+pub const LIST_PACKETS: usize = 4096;
+
+thread_local! {
+    /// Each thread's [`ListBatch`], grown by its first batches and reused (taken out while in
+    /// use, so that a batch traced from inside another gets one of its own).
+    static LISTS: std::cell::Cell<ListBatch> = std::cell::Cell::default();
+}
+
+/// The groups of packets waiting for [`Path::Lists`] ([`Geometry::closest_hit_group`]), and the
+/// buffers of a run of the lists: each thread has one, lent by [`ListBatch::with`].
+#[derive(Default)]
+pub struct ListBatch {
+    /// The packets waiting, the hits they start from, and the caller's index of each.
+    rays: Vec<RayPacket>,
+    hits: Vec<HitPacket>,
+    at: Vec<usize>,
+    /// Those of them the lists trace (forward rays), prepared; ray `id` of the lists is lane
+    /// `id % 8` of `prepared[id / 8]`, which is the waiting packet `packet[id / 8]`.
+    prepared: Vec<Ray1x8>,
+    packet: Vec<usize>,
+    /// Each prepared lane's hit so far (by id), active or not.
+    t: Vec<f32>,
+    prim: Vec<i32>,
+    /// The ids of the active lanes.
+    ids: Vec<u32>,
+    scratch: ListScratch,
+}
+
+impl ListBatch {
+    /// Runs `f` with this thread's batch, empty (its buffers as the last run left them).
+    pub fn with<R>(f: impl FnOnce(&mut ListBatch) -> R) -> R {
+        let mut lists = LISTS.take();
+        lists.clear();
+        let r = f(&mut lists);
+        LISTS.set(lists);
+        r
+    }
+
+    /// True when [`LIST_PACKETS`] packets or more wait: time for
+    /// [`Geometry::closest_hit_waiting`].
+    pub fn is_full(&self) -> bool {
+        self.rays.len() >= LIST_PACKETS
+    }
+
+    fn clear(&mut self) {
+        self.rays.clear();
+        self.hits.clear();
+        self.at.clear();
+    }
 }
 
 /// The smallest cosine between a group's ray directions and their mean at which the group
@@ -49,8 +108,9 @@ pub const COHERENT_COS: f32 = 0.9;
 
 /// Trees with fewer interior nodes than this are small enough that even incoherent packets
 /// share most of the nodes and leaves they visit: their incoherent groups stay packets
-/// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them ray
-/// by ray (torus1m diffuse: single rays 1.3x faster). Measured: PERF.md, "Which path".
+/// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them as
+/// lists (torus1m diffuse: single rays 1.3x faster than packets, PERF.md, "Which path"; lists
+/// faster than single rays, PERF.md, sitting 32).
 pub const SMALL_TREE_NODES: usize = 1024;
 
 /// Whether the active directions of `rays` all lie within `acos(cos)` of their mean (`cos` in
@@ -237,10 +297,10 @@ impl Geometry {
     }
 
     /// The path for a group of packets: a stream when their directions are coherent
-    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and single
-    /// rays in a bigger one. (Two walks interleaved, once the path of trees of 16,384 nodes or
-    /// more, fell behind one walk at a time on torus1m when single rays came to be prepared a
-    /// packet at a time, and were removed: PERF.md, sitting 20.)
+    /// ([`COHERENT_COS`]), otherwise packets in a small tree ([`SMALL_TREE_NODES`]) and lists
+    /// in a bigger one. (Two walks interleaved, once the path of trees of 16,384 nodes or more,
+    /// fell behind one walk at a time on torus1m when single rays came to be prepared a packet
+    /// at a time, and were removed: PERF.md, sitting 20.)
     pub fn choose_path(&self, rays: &[RayPacket]) -> Path {
         let nodes = self.bvh.nodes().len();
         if coherent(rays, COHERENT_COS) {
@@ -248,19 +308,71 @@ impl Geometry {
         } else if nodes < SMALL_TREE_NODES {
             Path::Packet
         } else {
-            Path::Single
+            Path::Lists
         }
     }
 
     /// Closest hits of any number of packets, each group of [`MAX_STREAM`] traced by the path
-    /// [`Geometry::choose_path`] picks for it.
+    /// [`Geometry::choose_path`] picks for it ([`Geometry::closest_hit_group`]): the groups on
+    /// [`Path::Lists`] together, [`LIST_PACKETS`] packets at a time.
     pub fn closest_hit_batch(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
-        for (r, h) in rays.chunks(MAX_STREAM).zip(hits.chunks_mut(MAX_STREAM)) {
-            self.closest_hit_path(self.choose_path(r), r, h);
+        assert_eq!(rays.len(), hits.len());
+        ListBatch::with(|lists| {
+            for first in (0..rays.len()).step_by(MAX_STREAM) {
+                let group = first..(first + MAX_STREAM).min(rays.len());
+                let (r, h) = (&rays[group.clone()], &mut hits[group]);
+                if !self.closest_hit_group(first, r, h, lists) && lists.is_full() {
+                    self.closest_hit_waiting(lists, |k, hit| hits[k] = hit);
+                }
+            }
+            self.closest_hit_waiting(lists, |k, hit| hits[k] = hit);
+        });
+    }
+
+    /// The closest hits of a group of up to [`MAX_STREAM`] packets, the caller's `first..`, by
+    /// the path [`Geometry::choose_path`] picks for it: true when traced (`hits` updated), false
+    /// when on [`Path::Lists`], where it waits in `lists` (copied) for
+    /// [`Geometry::closest_hit_waiting`], which the caller runs when `lists` is full
+    /// ([`ListBatch::is_full`]) and after its last group. The wavefront's and `whitted
+    /// bench`'s entry, group by group as they make the packets.
+    pub fn closest_hit_group(
+        &self,
+        first: usize,
+        rays: &[RayPacket],
+        hits: &mut [HitPacket],
+        lists: &mut ListBatch,
+    ) -> bool {
+        match self.choose_path(rays) {
+            Path::Lists => {
+                lists.rays.extend_from_slice(rays);
+                lists.hits.extend_from_slice(hits);
+                lists.at.extend(first..first + rays.len());
+                false
+            }
+            path => {
+                self.closest_hit_path(path, rays, hits);
+                true
+            }
         }
     }
 
-    /// Closest hits of up to [`MAX_STREAM`] packets by the given path.
+    /// Traces the packets waiting in `lists` together ([`Geometry::closest_hit_lists`]) and
+    /// hands each one's hits to `hit(k, hits)`, `k` the index its group gave it; `lists` is
+    /// empty after.
+    pub fn closest_hit_waiting(
+        &self,
+        lists: &mut ListBatch,
+        mut hit: impl FnMut(usize, HitPacket),
+    ) {
+        self.trace_lists(lists);
+        for (&k, h) in lists.at.iter().zip(&lists.hits) {
+            hit(k, *h);
+        }
+        lists.clear();
+    }
+
+    /// Closest hits of up to [`MAX_STREAM`] packets by the given path (any number on
+    /// [`Path::Lists`]).
     pub fn closest_hit_path(&self, path: Path, rays: &[RayPacket], hits: &mut [HitPacket]) {
         match path {
             Path::Stream => self.closest_hit_stream(rays, hits),
@@ -270,6 +382,88 @@ impl Geometry {
                 }
             }
             Path::Single => self.closest_hit_singles(rays, hits),
+            Path::Lists => self.closest_hit_lists(rays, hits),
+        }
+    }
+
+    /// Closest hits of any number of packets by breadth-first lists
+    /// ([`crate::bvh::Bvh8::closest_lists`]): all their rays go down the tree together, each
+    /// node splitting the list of rays that reach it among its children. Packets with a lane
+    /// that is not a forward ray (`tmin < 0`: an orthographic camera's) go ray by ray. The same
+    /// answers as [`Geometry::closest_hit`]; inactive lanes are left untouched.
+    pub fn closest_hit_lists(&self, rays: &[RayPacket], hits: &mut [HitPacket]) {
+        ListBatch::with(|lists| {
+            lists.rays.extend_from_slice(rays);
+            lists.hits.extend_from_slice(hits);
+            self.trace_lists(lists);
+            hits.copy_from_slice(&lists.hits);
+        });
+    }
+
+    /// Traces the packets waiting in `lists` ([`Geometry::closest_hit_lists`]), their hits
+    /// left in `lists.hits`.
+    fn trace_lists(&self, lists: &mut ListBatch) {
+        let ListBatch {
+            rays,
+            hits,
+            prepared,
+            packet,
+            t,
+            prim,
+            ids,
+            scratch,
+            ..
+        } = lists;
+        prepared.clear();
+        packet.clear();
+        t.clear();
+        prim.clear();
+        ids.clear();
+        for (p, (r, h)) in rays.iter().zip(hits.iter_mut()).enumerate() {
+            if !Ray1x8::all_forward(r) || self.bvh.is_empty() {
+                self.closest_hit_singles(std::slice::from_ref(r), std::slice::from_mut(h));
+                continue;
+            }
+            let first = (prepared.len() * LANES) as u32;
+            prepared.push(Ray1x8::new(r));
+            packet.push(p);
+            t.extend_from_slice(&lanes(h.t));
+            prim.extend_from_slice(&crate::simd::lanes_i32(h.prim));
+            let mut active = bitmask(r.active);
+            while active != 0 {
+                ids.push(first + active.trailing_zeros());
+                active &= active - 1;
+            }
+        }
+        if ids.is_empty() {
+            return;
+        }
+        self.bvh.closest_lists(
+            prepared,
+            ids,
+            t,
+            scratch,
+            |leaf, ids, tmax| {
+                for &id in ids {
+                    let (id, l) = (id as usize, id as usize % LANES);
+                    let r = &rays[packet[id / LANES]];
+                    let tmin = r.tmin.as_array()[l];
+                    let mut best = Best {
+                        t: tmax[id],
+                        prim: prim[id],
+                    };
+                    self.closest_leaf::<false>(leaf, &r.ray(l), tmin, &mut best);
+                    (tmax[id], prim[id]) = (best.t, best.prim);
+                }
+            },
+            |leaf| self.prefetch_leaf(leaf),
+        );
+        for (k, &p) in packet.iter().enumerate() {
+            let lanes_of = k * LANES..(k + 1) * LANES;
+            let h = &mut hits[p];
+            h.t = F32x8::new(t[lanes_of.clone()].try_into().expect("8 lanes"));
+            h.prim = I32x8::new(prim[lanes_of].try_into().expect("8 lanes"));
+            self.closest_planes_packet(&rays[p], &mut h.t, &mut h.prim);
         }
     }
 
@@ -394,7 +588,9 @@ impl Geometry {
                     *o = self.occluded_packet(r, *t);
                 }
             }
-            Path::Single => {
+            // the lists are a closest-hit path: shadow rays come in coherent groups (towards a
+            // point light, or along one direction), and the others go ray by ray
+            Path::Single | Path::Lists => {
                 for ((r, t), o) in rays.iter().zip(tmax).zip(out) {
                     let (tmin, tmax, active) = (lanes(r.tmin), lanes(*t), bitmask(r.active));
                     let mut bits = 0;

@@ -7,7 +7,7 @@ use bumpalo::Bump;
 use super::queue::{HitColumns, NO_NODE, RayQueue, ShadowQueue};
 use super::{Band, BandOutput, CameraSamples, Context, Run};
 use crate::bvh::MAX_STREAM;
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, ListBatch};
 use crate::math::{Ray, Vec2, Vec3, saturate};
 use crate::packet::{HitPacket, NO_HIT, RayPacket};
 use crate::scene::Camera;
@@ -76,8 +76,9 @@ pub fn generate_camera_rays(camera: &Camera, band: Band, queue: &mut RayQueue<'_
 }
 
 /// Finds the closest hit of every queued ray: packets of 8 consecutive rays, in groups of
-/// [`MAX_STREAM`] packets that [`Geometry::closest_hit_batch`] traces as a stream where they
-/// are coherent (camera rays: a 32x2-pixel strip) and ray by ray where they are not.
+/// [`MAX_STREAM`] packets that [`Geometry::closest_hit_group`] traces as a stream where they are
+/// coherent (camera rays: a 32x2-pixel strip); the incoherent groups of a big tree wait and go
+/// down the tree together as lists.
 pub fn intersect_closest<'s>(
     geometry: &Geometry,
     rays: &RayQueue<'_>,
@@ -85,22 +86,36 @@ pub fn intersect_closest<'s>(
     scratch: &'s Bump,
 ) -> HitColumns<'s> {
     let mut hits = HitColumns::with_capacity_in(rays.len(), scratch);
+    hits.t.resize(rays.len(), f32::INFINITY);
+    hits.prim.resize(rays.len(), NO_HIT);
+    // packet `k`'s hits into the columns
+    let mut store = |k: usize, h: HitPacket| {
+        let (first, end) = (k * LANES, (k * LANES + LANES).min(rays.len()));
+        hits.t[first..end].copy_from_slice(&lanes(h.t)[..end - first]);
+        hits.prim[first..end].copy_from_slice(&lanes_i32(h.prim)[..end - first]);
+    };
     let group = LANES * MAX_STREAM;
-    for first in (0..rays.len()).step_by(group) {
-        // the next group's rays, fetched while this one is traced (PERF.md, "Prefetching
-        // the queue")
-        rays.prefetch(first + group, group);
-        let packets = (rays.len() - first).div_ceil(LANES).min(MAX_STREAM);
-        let batch: [RayPacket; MAX_STREAM] =
-            std::array::from_fn(|k| rays.packet(first + (k % packets) * LANES, tmin));
-        let mut hit = [HitPacket::new(f32::INFINITY); MAX_STREAM];
-        geometry.closest_hit_batch(&batch[..packets], &mut hit[..packets]);
-        for (k, h) in hit[..packets].iter().enumerate() {
-            let n = (rays.len() - first - k * LANES).min(LANES);
-            hits.t.extend_from_slice(&lanes(h.t)[..n]);
-            hits.prim.extend_from_slice(&lanes_i32(h.prim)[..n]);
+    ListBatch::with(|lists| {
+        for first in (0..rays.len()).step_by(group) {
+            // the next group's rays, fetched while this one is traced (PERF.md, "Prefetching
+            // the queue")
+            rays.prefetch(first + group, group);
+            let packets = (rays.len() - first).div_ceil(LANES).min(MAX_STREAM);
+            let batch: [RayPacket; MAX_STREAM] =
+                std::array::from_fn(|k| rays.packet(first + (k % packets) * LANES, tmin));
+            let mut hit = [HitPacket::new(f32::INFINITY); MAX_STREAM];
+            let k0 = first / LANES;
+            let (batch, hit) = (&batch[..packets], &mut hit[..packets]);
+            if geometry.closest_hit_group(k0, batch, hit, lists) {
+                for (k, h) in hit.iter().enumerate() {
+                    store(k0 + k, *h);
+                }
+            } else if lists.is_full() {
+                geometry.closest_hit_waiting(lists, &mut store);
+            }
         }
-    }
+        geometry.closest_hit_waiting(lists, &mut store);
+    });
     hits
 }
 

@@ -1,0 +1,139 @@
+//! Breadth-first ray lists (Barringer and Akenine-Möller 2014, dynamic ray stream traversal):
+//! many incoherent rays go down the 8-wide BVH together as a list of ray ids. A node tests each
+//! ray of its list against its 8 children (one 8-lane pass per ray, [`Ray1x8::test_lane`]) and
+//! splits the list into one list per child the rays enter; a leaf hands its list to the caller's
+//! leaf test, which lowers the rays' `tmax`. A node or leaf is then fetched once for all the rays
+//! that reach it together, where single-ray walks fetch it once per ray, and the rays' tests at
+//! a node do not wait on one another, where a walk's steps each wait on the one before.
+//!
+//! Children are visited in slot order (the builder puts the largest box first): the rays of a
+//! list point every way, so no order is nearest first for all of them, and the closest hit does
+//! not depend on the order (ties go to the smaller geometry index). `geometry::query` decides
+//! which rays take this path.
+//!
+//! ```text
+//! packets prepared (Ray1x8), ray id = packet * 8 + lane, tmax per id
+//!   --> root: every id --> node: one list per entered child --> ... --> leaf(leaf, ids, tmax)
+//! ```
+
+use super::{Bvh8, Leaf, NodeRef, Ray1x8, WIDTH};
+use crate::simd::{LANES, compact_lanes};
+
+/// Buffers of [`Bvh8::closest_lists`], kept by the caller from one call to the next so that a
+/// call allocates nothing once they have grown.
+#[derive(Debug, Default)]
+pub struct ListScratch {
+    /// The lists, one after another: a node's list, then the lists it hands down. Only
+    /// `..top` of it is in use; it never shrinks, so growing it zeroes memory only once.
+    ids: Vec<u32>,
+    /// Lists waiting for their node: the node, where its list starts in `ids`, how long it is.
+    waiting: Vec<(NodeRef, u32, u32)>,
+    /// The children each ray of the list being split enters (bit `i` = child `i`), zeros after
+    /// the list up to a multiple of 8.
+    masks: Vec<u8>,
+}
+
+impl Bvh8 {
+    /// The closest hits of forward rays (`tmin >= 0`), traced together by breadth-first lists:
+    /// ray `id` is lane `id % 8` of the packet `rays[id / 8]` (prepared by [`Ray1x8::new`]);
+    /// `ids` names the rays to trace, and `tmax[id]` bounds each one's hit. `leaf(leaf, ids,
+    /// tmax)` tests a leaf's primitives for the rays it lists and lowers their `tmax` where it
+    /// finds nearer hits; every ray reaches every leaf it may hit nearer than its `tmax`.
+    /// `touch(leaf)` starts fetching a leaf handed a list (the lists handed down are visited
+    /// after their siblings' subtrees, so every entered child is fetched while those run).
+    ///
+    /// # Panics
+    ///
+    /// If an id names a ray outside `rays` or `tmax`.
+    pub fn closest_lists(
+        &self,
+        rays: &[Ray1x8],
+        ids: &[u32],
+        tmax: &mut [f32],
+        s: &mut ListScratch,
+        mut leaf: impl FnMut(Leaf, &[u32], &mut [f32]),
+        touch: impl Fn(Leaf),
+    ) {
+        if self.root.is_empty() || ids.is_empty() {
+            return;
+        }
+        s.grow(ids.len() + LANES);
+        s.ids[..ids.len()].copy_from_slice(ids);
+        s.waiting.clear();
+        s.waiting.push((self.root, 0, ids.len() as u32));
+        while let Some((r, start, len)) = s.waiting.pop() {
+            let list = start as usize..(start + len) as usize;
+            if r.is_leaf() {
+                leaf(r.as_leaf(), &s.ids[list], tmax);
+                continue;
+            }
+            // the lists after this one were handed down by nodes already done with
+            let top = list.end;
+            // SAFETY: `r` is the root or a child reference read from this tree's nodes
+            let n = unsafe { self.node_at(r) };
+            // against `tmin` 0, not each ray's own (one array less to read): a child entered
+            // between 0 and `tmin` is visited for nothing, and no hit changes
+            let entered = s.test_list(list.clone(), |id| {
+                let id = id as usize;
+                rays[id / LANES].test_lane(id % LANES, n, 0.0, tmax[id])
+            });
+            // slot 0's list last, so that it is the first taken back
+            let mut at = top;
+            for c in (0..WIDTH).rev().filter(|&c| entered >> c & 1 == 1) {
+                let end = s.hand_down(list.clone(), c, at);
+                self.prefetch(n.child[c], &touch);
+                s.waiting.push((n.child[c], at as u32, (end - at) as u32));
+                at = end;
+            }
+        }
+    }
+}
+
+impl ListScratch {
+    /// Makes `ids` at least `len` long.
+    fn grow(&mut self, len: usize) {
+        if self.ids.len() < len {
+            self.ids.resize(len, 0);
+        }
+    }
+
+    /// Tests each ray of `ids[list]` by `test` (its entered children, bit `i` = child `i`),
+    /// keeps the masks for [`ListScratch::hand_down`], and returns every child some ray enters.
+    #[inline(always)]
+    fn test_list(&mut self, list: std::ops::Range<usize>, test: impl Fn(u32) -> u32) -> u32 {
+        let len = list.len();
+        self.masks.clear();
+        self.masks.resize(len.next_multiple_of(LANES), 0);
+        let mut entered = 0;
+        for (m, &id) in self.masks.iter_mut().zip(&self.ids[list]) {
+            let bits = test(id);
+            *m = bits as u8;
+            entered |= bits;
+        }
+        entered
+    }
+
+    /// Writes, from `at` on, the ids of `ids[list]` whose mask has bit `child` (in list order),
+    /// 8 rays at a time; returns where the new list ends. Each store of 8 may write up to 7
+    /// ids past the new list, where the next list (or nothing) goes.
+    #[inline(always)]
+    fn hand_down(&mut self, list: std::ops::Range<usize>, child: usize, at: usize) -> usize {
+        // room for a list as long as this one, the 8-lane stores past its end, and the reads
+        // of the last 8 rays past the list's end (their masks are zero)
+        self.grow(at + list.len() + LANES);
+        let mut end = at;
+        for (k, m) in self.masks.chunks_exact(LANES).enumerate() {
+            // bit `child` of each of the 8 masks, gathered into one byte (bit j = ray j)
+            let x = u64::from_le_bytes(m.try_into().expect("8 masks"));
+            let bits = (((x >> child) & 0x0101_0101_0101_0101).wrapping_mul(0x0102_0408_1020_4080)
+                >> 56) as u32;
+            if bits != 0 {
+                let from = list.start + k * LANES;
+                let rays: [u32; LANES] = self.ids[from..from + LANES].try_into().expect("8 ids");
+                self.ids[end..end + LANES].copy_from_slice(&compact_lanes(rays, bits));
+                end += bits.count_ones() as usize;
+            }
+        }
+        end
+    }
+}
