@@ -184,7 +184,11 @@ pub struct Spawn {
 /// (black material colour, bounce limit reached, weight under the cutoff, or total internal
 /// reflection for the refracted ray). `geometric` is the unflipped normal that decides whether
 /// the ray enters or leaves (objects sit in vacuum, no nesting).
-#[inline]
+///
+/// Always inlined: as a plain `#[inline]` LLVM stopped inlining it into the wavefront's
+/// `shade_hits` when `intersect_closest` beside it changed, and the showcase frame took 5-6%
+/// longer, every bounce (PERF.md, sitting 32).
+#[inline(always)]
 pub fn scatter(
     s: &Surface,
     dir: Vec3,
