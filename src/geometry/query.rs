@@ -103,14 +103,16 @@ impl ListBatch {
 /// The smallest cosine between a group's ray directions and their mean at which the group
 /// counts as coherent and is traced as a stream. Camera rays of a 32x2 strip: 1.000; shadow rays
 /// towards a point light: above 0.999; mirror rays off the torus: above 0.96 for 90% of groups;
-/// diffuse rays: about 0. Measured: PERF.md, "Which path a ray takes".
+/// diffuse rays: about 0. Measured: PERF.md §10, "What was tried (figures from the branch's
+/// development)", "Path per group".
 pub const COHERENT_COS: f32 = 0.9;
 
 /// Trees with fewer interior nodes than this are small enough that even incoherent packets
 /// share most of the nodes and leaves they visit: their incoherent groups stay packets
 /// (spheres4096, ~150 nodes: packets 2x faster than single rays), bigger trees trace them as
-/// lists (torus1m diffuse: single rays 1.3x faster than packets, PERF.md, "Which path"; lists
-/// faster than single rays, PERF.md, sitting 32).
+/// lists (torus1m diffuse: single rays 1.3x faster than packets, PERF.md §10, "What was tried
+/// (figures from the branch's development)", "Path per group"; lists faster than single rays,
+/// sitting 32).
 pub const SMALL_TREE_NODES: usize = 1024;
 
 /// Whether the active directions of `rays` all lie within `acos(cos)` of their mean (`cos` in
