@@ -6,10 +6,11 @@
 //! that reach it together, where single-ray walks fetch it once per ray, and the rays' tests at
 //! a node do not wait on one another, where a walk's steps each wait on the one before.
 //!
-//! Children are visited in slot order (the builder puts the largest box first): the rays of a
-//! list point every way, so no order is nearest first for all of them, and the closest hit does
-//! not depend on the order (ties go to the smaller geometry index). `geometry::query` decides
-//! which rays take this path.
+//! A node's children are visited nearest first by the smallest entry distance among the rays
+//! that enter each (the rays of a list point every way, so no order is nearest first for all
+//! of them; this one puts first the child around the rays' origins, where many of them hit).
+//! The closest hit does not depend on the order (ties go to the smaller geometry index).
+//! `geometry::query` decides which rays take this path.
 //!
 //! ```text
 //! packets prepared (Ray1x8), ray id = packet * 8 + lane, tmax per id
@@ -17,7 +18,7 @@
 //! ```
 
 use super::{Bvh8, Leaf, NodeRef, Ray1x8, WIDTH};
-use crate::simd::{LANES, compact_lanes};
+use crate::simd::{F32x8, LANES, bitmask, compact_lanes, min, select};
 
 /// Buffers of [`Bvh8::closest_lists`], kept by the caller from one call to the next so that a
 /// call allocates nothing once they have grown.
@@ -71,15 +72,20 @@ impl Bvh8 {
             let top = list.end;
             // SAFETY: `r` is the root or a child reference read from this tree's nodes
             let n = unsafe { self.node_at(r) };
-            // against `tmin` 0, not each ray's own (one array less to read): a child entered
-            // between 0 and `tmin` is visited for nothing, and no hit changes
+            // each ray's children, against `tmin` 0, not its own (one array less to read: a
+            // child entered between 0 and `tmin` is visited for nothing, and no hit changes),
+            // and each child's nearest entry among the rays that enter it
+            let inf = F32x8::splat(f32::INFINITY);
+            let mut nearest = inf;
             let entered = s.test_list(list.clone(), |id| {
                 let id = id as usize;
-                rays[id / LANES].test_lane(id % LANES, n, 0.0, tmax[id])
+                let (m, near) = rays[id / LANES].test_lane(id % LANES, n, 0.0, tmax[id]);
+                nearest = min(nearest, select(m, near, inf));
+                bitmask(m)
             });
-            // slot 0's list last, so that it is the first taken back
+            let (order, k) = farthest_first(entered, nearest.to_array());
             let mut at = top;
-            for c in (0..WIDTH).rev().filter(|&c| entered >> c & 1 == 1) {
+            for &c in &order[..k] {
                 let end = s.hand_down(list.clone(), c, at);
                 self.prefetch(n.child[c], &touch);
                 s.waiting.push((n.child[c], at as u32, (end - at) as u32));
@@ -87,6 +93,28 @@ impl Bvh8 {
             }
         }
     }
+}
+
+/// The children set in `entered` (bit `i` = child `i`) by `key[i]`, largest first (of equal
+/// keys the lower slot first), and how many: the order the lists are handed down in, so that
+/// the child some ray enters nearest is taken back first.
+#[inline(always)]
+fn farthest_first(entered: u32, key: [f32; WIDTH]) -> ([usize; WIDTH], usize) {
+    let mut order = [0; WIDTH];
+    let mut k = 0;
+    let mut e = entered;
+    while e != 0 {
+        let c = e.trailing_zeros() as usize;
+        e &= e - 1;
+        let mut j = k;
+        while j > 0 && key[order[j - 1]] < key[c] {
+            order[j] = order[j - 1];
+            j -= 1;
+        }
+        order[j] = c;
+        k += 1;
+    }
+    (order, k)
 }
 
 impl ListScratch {
@@ -100,7 +128,7 @@ impl ListScratch {
     /// Tests each ray of `ids[list]` by `test` (its entered children, bit `i` = child `i`),
     /// keeps the masks for [`ListScratch::hand_down`], and returns every child some ray enters.
     #[inline(always)]
-    fn test_list(&mut self, list: std::ops::Range<usize>, test: impl Fn(u32) -> u32) -> u32 {
+    fn test_list(&mut self, list: std::ops::Range<usize>, mut test: impl FnMut(u32) -> u32) -> u32 {
         let len = list.len();
         self.masks.clear();
         self.masks.resize(len.next_multiple_of(LANES), 0);

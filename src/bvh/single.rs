@@ -290,13 +290,19 @@ impl Ray1x8 {
         }
     }
 
-    /// The children of `n` lane `l` enters within `(tmin, tmax)` (bit `i` = child `i`): the
-    /// mask of lane `l`'s [`Ray1::test`] (the same bits), its values read where they lie in the
-    /// packet and its planes picked by its octant at each call. The test of the breadth-first
-    /// lists (`lists.rs`), which take each ray once per node it visits, in any order, so prepare
-    /// no ray for a walk of its own.
+    /// The children of `n` lane `l` enters within `(tmin, tmax)` (as a mask, lane `i` = child
+    /// `i`) and its entry distances: lane `l`'s [`Ray1::test`] (the same bits), its values read
+    /// where they lie in the packet and its planes picked by its octant at each call. The test
+    /// of the breadth-first lists (`lists.rs`), which take each ray once per node it visits, in
+    /// any order, so prepare no ray for a walk of its own.
     #[inline(always)]
-    pub(super) fn test_lane(&self, l: usize, n: &Node8, tmin: f32, tmax: f32) -> u32 {
+    pub(super) fn test_lane(
+        &self,
+        l: usize,
+        n: &Node8,
+        tmin: f32,
+        tmax: f32,
+    ) -> (crate::simd::Mask, F32x8) {
         let lane = |v: &[F32x8; 3], a: usize| F32x8::splat(v[a].as_array()[l]);
         // the entry plane of axis `a` is its upper one where the lane's direction is negative
         let down = |a: usize| (self.down[a] >> l & 1) as usize;
@@ -311,15 +317,14 @@ impl Ray1x8 {
         // the planes are the lane's own (the closures ignore the octant's)
         let any_octant = Plane::ENTRY_OF_OCTANT[0];
         let tmax = F32x8::splat(tmax) * F32x8::splat(ROBUST);
-        let (enter, _) = slab_octant::<true, true>(
+        slab_octant::<true, true>(
             entry,
             exit,
             &any_octant,
             &any_octant,
             F32x8::splat(tmin),
             tmax,
-        );
-        bitmask(enter)
+        )
     }
 
     /// Lane `l` as a forward ray for [`Ray1::test`].
@@ -821,11 +826,9 @@ mod tests {
                     );
                     assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
                     // one lane read in place (the breadth-first lists' test)
-                    assert_eq!(
-                        prepared.test_lane(l, &n, tmin[l], tmax[l]),
-                        m1,
-                        "case {case}"
-                    );
+                    let (m2, n2) = prepared.test_lane(l, &n, tmin[l], tmax[l]);
+                    assert_eq!(crate::simd::bitmask(m2), m1, "case {case}");
+                    assert_eq!(n2.to_array()[i].to_bits(), n1.to_array()[i].to_bits());
                     // the whole node at once: lane l's byte and its row of distances
                     assert_eq!(node.mask(l), m1, "case {case}");
                     assert_eq!(node.near[i][l].to_bits(), n1.to_array()[i].to_bits());
