@@ -840,6 +840,63 @@ mod tests {
     /// Children come out of the walk's sort farthest first, of equal distances the higher slot
     /// first (the lower is visited first): distances of both signs, zeros, infinities and
     /// ties, every count of entered children.
+    /// The empty slots of a node (inverted boxes) are entered by no lane, whatever the ray:
+    /// every octant, direction components of either zero, origins inside the children, `tmax`
+    /// infinite. The packet walk tests all 8 slots of a node on this ground
+    /// (`packet::hit_children_all`), as the whole-node tests do.
+    #[test]
+    fn empty_slots_are_entered_by_no_ray() {
+        let mut rng = Rng(0x0e47_5107);
+        for case in 0..300 {
+            let children = 1 + case % (WIDTH - 1);
+            let boxes: Vec<(NodeRef, Aabb)> = (0..children)
+                .map(|_| {
+                    let a =
+                        Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
+                    let b =
+                        Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
+                    (
+                        NodeRef::EMPTY,
+                        Aabb {
+                            min: a.min(b),
+                            max: a.max(b),
+                        },
+                    )
+                })
+                .collect();
+            let n = Node8::new(&boxes);
+            let rays: [Ray; 8] = std::array::from_fn(|l| {
+                let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-6.0, 6.0) as f32));
+                let mut d: [f32; 3] = std::array::from_fn(|_| rng.range64(-1.0, 1.0) as f32);
+                // zeros of both signs on one or two axes
+                match (case + l) % 4 {
+                    0 => d[l % 3] = 0.0,
+                    1 => d[l % 3] = -0.0,
+                    2 => (d[l % 3], d[(l + 1) % 3]) = (0.0, -0.0),
+                    _ => {}
+                }
+                Ray {
+                    origin: o,
+                    dir: Vec3::from_array(d),
+                }
+            });
+            let prepared = Ray1x8::new(&RayPacket::from_rays(&rays, 0.0));
+            let (t0, t1) = (F32x8::splat(0.0), F32x8::splat(f32::INFINITY));
+            for i in children..WIDTH {
+                let (mask, _) = prepared.test_child(&n, i, t0, t1);
+                assert_eq!(crate::simd::bitmask(mask), 0, "case {case}, slot {i}");
+            }
+            for l in 0..8 {
+                let (mask, _) = prepared.test_lane(l, &n, 0.0, f32::INFINITY);
+                assert_eq!(
+                    crate::simd::bitmask(mask) >> children,
+                    0,
+                    "case {case}, lane {l}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn entered_children_sort_farthest_first_ties_by_slot() {
         let mut rng = Rng(0x3c6e_f372);
