@@ -180,6 +180,67 @@ fn test_geometry() -> Geometry {
     g
 }
 
+/// A lane whose hit so far is an index at an infinite distance (no bound: any hit beats it)
+/// keeps that index where it hits nothing, also where it passes between the spheres of a leaf
+/// it enters: the packet leaf takes the nearest among the spheres each lane hits, so a miss is
+/// never a tie at infinity with a smaller index. Plain and transformed spheres, every count of
+/// active lanes from 3 (fewer go ray by ray).
+#[test]
+fn a_miss_keeps_an_index_at_infinity() {
+    for transformed in [false, true] {
+        // 8 spheres in a row along x, 2 apart, radius 0.5: gaps between them inside the leaves
+        let spheres: String = (0..8)
+            .map(|k| {
+                let x = 2.0 * k as f32;
+                if transformed {
+                    format!("Transform {{ Translate {x} 0 0 Scale 0.5 0.5 0.4 Sphere {{ center 0 0 0 radius 1 }} }} ")
+                } else {
+                    format!("Sphere {{ center {x} 0 0 radius 0.5 }} ")
+                }
+            })
+            .collect();
+        let text = format!(
+            "PerspectiveCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }}
+            Materials {{ numMaterials 1 Material {{ diffuseColor 1 1 1 }} }}
+            Group {{ numObjects 8 MaterialIndex 0 {spheres} }}"
+        );
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/row.txt");
+        let g = Geometry::from_scene(&Scene::from_str(&text, &path).unwrap());
+        // lane 0 hits the first sphere, the others go down z through the gaps
+        let rays: [Ray; LANES] = std::array::from_fn(|l| {
+            let x = if l == 0 { 0.0 } else { 2.0 * l as f32 - 1.0 };
+            Ray::new(Vec3::new(x, 0.1, 5.0), Vec3::new(0.0, 0.0, -1.0))
+        });
+        for active in 3..=LANES {
+            let mut packet = RayPacket::from_rays(&rays, 0.0);
+            packet.active = mask_from_bits((1u32 << active) - 1);
+            const KEPT: i32 = 1000;
+            let mut hit = HitPacket {
+                t: from_lanes([f32::INFINITY; LANES]),
+                prim: whitted::simd::I32x8::new([KEPT; LANES]),
+            };
+            g.closest_hit_packet(&packet, &mut hit);
+            let (t, prim) = (lanes(hit.t), lanes_i32(hit.prim));
+            let first = g
+                .closest_hit(&rays[0], 0.0, f32::INFINITY)
+                .expect("lane 0 hits");
+            assert_eq!(
+                (t[0], prim[0]),
+                (first.0, first.1 as i32),
+                "transformed {transformed}"
+            );
+            for l in 1..active {
+                assert_eq!(g.closest_hit(&rays[l], 0.0, f32::INFINITY), None);
+                assert_eq!(
+                    (t[l], prim[l]),
+                    (f32::INFINITY, KEPT),
+                    "transformed {transformed}, lane {l}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn geometry_closest_hit_packet_equals_single_rays_and_keeps_inactive_lanes() {
     let g = test_geometry();

@@ -369,16 +369,18 @@ fn lanes_with_a_nearer_hit_keep_it_on_every_path() {
     let g = built(&soup(&mut rng, 3000), &BuildSettings::default());
     const KEPT: i32 = 7_000_000;
     for group in ray_groups(&mut rng, 40) {
-        // lanes start with a hit of their own: far, near (0.25, where the soup seldom is) or none
+        // lanes start with a hit of their own: far, near (0.25, where the soup seldom is), at
+        // infinity (an index with no bound: any hit beats it, a miss keeps it) or none
         let start: Vec<([f32; LANES], [i32; LANES])> = group
             .iter()
             .map(|_| {
                 let mut t = [f32::INFINITY; LANES];
                 let mut prim = [-1; LANES];
                 for l in 0..LANES {
-                    match rng.below(3) {
+                    match rng.below(4) {
                         0 => (t[l], prim[l]) = (0.25, KEPT),
                         1 => (t[l], prim[l]) = (rng.range(1.0, 30.0), KEPT + 1),
+                        2 => prim[l] = KEPT + 2,
                         _ => {}
                     }
                 }

@@ -837,9 +837,6 @@ mod tests {
         }
     }
 
-    /// Children come out of the walk's sort farthest first, of equal distances the higher slot
-    /// first (the lower is visited first): distances of both signs, zeros, infinities and
-    /// ties, every count of entered children.
     /// The empty slots of a node (inverted boxes) are entered by no lane, whatever the ray:
     /// every octant, direction components of either zero, origins inside the children, `tmax`
     /// infinite. The packet walk tests all 8 slots of a node on this ground
@@ -897,6 +894,9 @@ mod tests {
         }
     }
 
+    /// Children come out of the walk's sort farthest first, of equal distances the higher slot
+    /// first (the lower is visited first): distances of both signs, zeros, infinities and
+    /// ties, every count of entered children.
     #[test]
     fn entered_children_sort_farthest_first_ties_by_slot() {
         let mut rng = Rng(0x3c6e_f372);

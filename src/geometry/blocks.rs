@@ -260,45 +260,45 @@ fn transformed_roots(inv: &[f32; 12], ray: &Ray) -> (F32x4, F32x4, F32x4) {
     sphere_lanes(Vec3x4::splat(Vec3::ZERO), F32x4::splat(1.0), o, d)
 }
 
-/// A sphere's nearer root past `tmin` in each lane, infinity where neither is.
+/// A sphere's nearer root past `tmin` in each lane (infinity where neither is), and the lanes
+/// where one is.
 #[inline(always)]
-fn nearer_root(real: Mask, t0: F32x8, t1: F32x8, tmin: F32x8) -> F32x8 {
+fn nearer_root(real: Mask, t0: F32x8, t1: F32x8, tmin: F32x8) -> (F32x8, Mask) {
     let inf = F32x8::splat(f32::INFINITY);
     let (h0, h1) = (real & gt(t0, tmin), real & gt(t1, tmin));
-    select(h0, t0, select(h1, t1, inf))
+    (select(h0, t0, select(h1, t1, inf)), h0 | h1)
 }
 
 /// Lowers `t` (and sets `prim`) in the `lanes` where one of `count` primitives is nearer, or
 /// as near with a smaller index; `candidate(k)` is primitive `k`'s distance in each lane
-/// (infinity where it is not hit) and its index. Up to 8 candidates at a time are none compared
-/// with the hit so far: their nearest by one minimum each, then the smallest index among those
-/// at it, then that against `t`. The nearest (t, index) whatever the order, as primitive by
-/// primitive, with no chain through `t` from one primitive to the next.
+/// (infinity where it is not hit), the lanes it hits and its index. Up to 8 candidates at a
+/// time, none of them compared with the hit so far: their nearest by one minimum each, then
+/// the smallest index among those hit at it, then that against `t`. The nearest (t, index)
+/// whatever the order, as primitive by primitive, with no chain through `t` from one primitive
+/// to the next.
 #[inline(always)]
 fn take_nearest(
     count: usize,
     lanes: Mask,
     t: &mut F32x8,
     prim: &mut I32x8,
-    candidate: impl Fn(usize) -> (F32x8, u32),
+    candidate: impl Fn(usize) -> (F32x8, Mask, u32),
 ) {
     let inf = F32x8::splat(f32::INFINITY);
     let none = I32x8::splat(i32::MAX);
     for chunk in (0..count).step_by(8) {
         let n = (count - chunk).min(8);
-        let mut cand = [(inf, 0u32); 8];
+        let mut cand = [(inf, crate::simd::mask_none(), 0u32); 8];
         let mut best = inf;
         for (k, c) in cand.iter_mut().enumerate().take(n) {
             *c = candidate(chunk + k);
             best = crate::simd::min(best, c.0);
         }
+        // (a lane no candidate hits keeps `none`, so an infinite `t` with an index is kept)
         let mut id = none;
-        for &(c, p) in cand.iter().take(n) {
-            id = id.min(select_i32(
-                crate::simd::eq(c, best),
-                I32x8::splat(p as i32),
-                none,
-            ));
+        for &(c, hit, p) in cand.iter().take(n) {
+            let at_best = crate::simd::eq(c, best) & hit;
+            id = id.min(select_i32(at_best, I32x8::splat(p as i32), none));
         }
         let smaller: Mask = bytemuck::cast(id.simd_lt(*prim));
         let hit = (lt(best, *t) | (best.simd_eq(*t) & smaller)) & lanes;
@@ -503,7 +503,8 @@ impl Geometry {
                 let (c, r2) = b.lane(k % BLOCK);
                 let (real, t0, t1) =
                     sphere_lanes(Vec3x8::splat(c), F32x8::splat(r2), rays.origin, rays.dir);
-                (nearer_root(real, t0, t1, rays.tmin), b.prim[k % BLOCK])
+                let (near, hit) = nearer_root(real, t0, t1, rays.tmin);
+                (near, hit, b.prim[k % BLOCK])
             }),
             PrimKind::TransformedSphere => {
                 let base = self.base(PrimKind::TransformedSphere) as u32;
@@ -513,7 +514,8 @@ impl Geometry {
                     let local = affine_packet(&self.transformed.inverse(i as usize), rays);
                     let (real, t0, t1) =
                         sphere_lanes(Vec3x8::zero(), F32x8::splat(1.0), local.origin, local.dir);
-                    (nearer_root(real, t0, t1, rays.tmin), base + i)
+                    let (near, hit) = nearer_root(real, t0, t1, rays.tmin);
+                    (near, hit, base + i)
                 })
             }
             PrimKind::Plane => unreachable!("planes are not in the BVH"),
