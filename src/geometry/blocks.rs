@@ -210,6 +210,16 @@ impl Best {
     }
 }
 
+/// Takes the lanes `m` of candidate `(ti, id)` into `(t, prim)` where nearer, or as near with a
+/// smaller index: [`Best::take`] lane by lane.
+#[inline(always)]
+pub(super) fn take_packet(m: Mask, ti: F32x8, id: I32x8, t: &mut F32x8, prim: &mut I32x8) {
+    let smaller: Mask = bytemuck::cast(id.simd_lt(*prim));
+    let hit = m & (lt(ti, *t) | (ti.simd_eq(*t) & smaller));
+    *t = select(hit, ti, *t);
+    *prim = select_i32(hit, id, *prim);
+}
+
 /// The lanes of a 4-lane candidate set that may beat `best`: no farther. The ties among them
 /// go to [`take_lanes`], whose [`Best::take`] keeps the smaller index, so the answer is that of
 /// the exact filter (nearer, or as near and a smaller index) without its index comparison in
@@ -263,7 +273,7 @@ fn transformed_roots(inv: &[f32; 12], ray: &Ray) -> (F32x4, F32x4, F32x4) {
 /// A sphere's nearer root past `tmin` in each lane (infinity where neither is), and the lanes
 /// where one is.
 #[inline(always)]
-fn nearer_root(real: Mask, t0: F32x8, t1: F32x8, tmin: F32x8) -> (F32x8, Mask) {
+pub(super) fn nearer_root(real: Mask, t0: F32x8, t1: F32x8, tmin: F32x8) -> (F32x8, Mask) {
     let inf = F32x8::splat(f32::INFINITY);
     let (h0, h1) = (real & gt(t0, tmin), real & gt(t1, tmin));
     (select(h0, t0, select(h1, t1, inf)), h0 | h1)
@@ -300,10 +310,7 @@ fn take_nearest(
             let at_best = crate::simd::eq(c, best) & hit;
             id = id.min(select_i32(at_best, I32x8::splat(p as i32), none));
         }
-        let smaller: Mask = bytemuck::cast(id.simd_lt(*prim));
-        let hit = (lt(best, *t) | (best.simd_eq(*t) & smaller)) & lanes;
-        *t = select(hit, best, *t);
-        *prim = select_i32(hit, id, *prim);
+        take_packet(lanes, best, id, t, prim);
     }
 }
 
@@ -490,12 +497,8 @@ impl Geometry {
                         rays.origin,
                         rays.dir,
                     );
-                    let id8 = I32x8::splat(b.prim[k % BLOCK] as i32);
-                    let smaller: Mask = bytemuck::cast(id8.simd_lt(*prim));
-                    let closer = lt(tt, *t) | (tt.simd_eq(*t) & smaller);
-                    let hit = inside & gt(tt, rays.tmin) & closer & lanes;
-                    *t = select(hit, tt, *t);
-                    *prim = select_i32(hit, id8, *prim);
+                    let id = I32x8::splat(b.prim[k % BLOCK] as i32);
+                    take_packet(inside & gt(tt, rays.tmin) & lanes, tt, id, t, prim);
                 }
             }
             PrimKind::Sphere => take_nearest(count, lanes, t, prim, |k| {

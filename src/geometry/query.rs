@@ -10,7 +10,7 @@
 //! smaller geometry index, so single rays, packets, streams and lists give the same
 //! `(t, prim)` bit for bit. Packet queries never touch inactive lanes.
 
-use super::blocks::Best;
+use super::blocks::{Best, nearer_root, take_packet};
 use super::{Geometry, PrimKind};
 use crate::bvh::{Entered, ListScratch, MAX_STREAM, Ray1x8};
 use crate::intersect::sphere::affine_packet;
@@ -22,8 +22,7 @@ use crate::intersect::{
 use crate::math::{Ray, Vec3};
 use crate::packet::{HitPacket, RayPacket};
 use crate::simd::{
-    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, ge, gt, lanes, lt,
-    mask_none, select, select_i32,
+    F32x4, F32x8, I32x8, LANES, Mask, Simd, Vec3x4, Vec3x8, any, bitmask, ge, lanes, mask_none,
 };
 
 /// How a group of packets is traced (see [`Geometry::closest_hit_batch`]).
@@ -614,7 +613,7 @@ impl Geometry {
         for i in self.planes_range() {
             let (n, d) = (self.planes.normal(i), self.planes.offset[i]);
             let (m, ti) = intersect_plane_packet(n, d, rays, F32x8::splat(f32::INFINITY));
-            take_packet(m, ti, (base + i) as i32, t, prim);
+            take_packet(m, ti, I32x8::splat((base + i) as i32), t, prim);
         }
     }
 
@@ -671,7 +670,7 @@ impl Geometry {
         for i in 0..self.triangles.len() {
             let (v0, e1, e2) = self.triangles.get(i);
             let (m, ti) = intersect_triangle_packet(v0, e1, e2, rays, inf);
-            take_packet(m, ti, i as i32, t, prim);
+            take_packet(m, ti, I32x8::splat(i as i32), t, prim);
         }
         let base = self.base(PrimKind::Sphere);
         for i in 0..self.spheres.len() {
@@ -762,17 +761,6 @@ impl crate::bvh::TraversalProbe for LaneCounter {
     }
 }
 
-/// Takes the lanes `m` of candidate `(ti, id)` into `(t, prim)` where nearer, or as near with a
-/// smaller index.
-#[inline(always)]
-fn take_packet(m: Mask, ti: F32x8, id: i32, t: &mut F32x8, prim: &mut I32x8) {
-    let id8 = I32x8::splat(id);
-    let smaller: Mask = bytemuck::cast(id8.simd_lt(*prim));
-    let hit = m & (lt(ti, *t) | (ti.simd_eq(*t) & smaller));
-    *t = select(hit, ti, *t);
-    *prim = select_i32(hit, id8, *prim);
-}
-
 /// The root rule of the sphere kernels with the tie rule, one ray (lane 0 of splatted roots).
 #[inline(always)]
 fn take_roots(real: F32x4, t0: F32x4, t1: F32x4, tmin: f32, id: i32, best: &mut Best) {
@@ -799,14 +787,9 @@ fn take_roots_packet(
     t: &mut F32x8,
     prim: &mut I32x8,
 ) {
-    let id8 = I32x8::splat(id);
-    let smaller: Mask = bytemuck::cast(id8.simd_lt(*prim));
-    let closer = |x: F32x8| lt(x, *t) | (x.simd_eq(*t) & smaller);
-    let a0 = real & gt(t0, tmin) & closer(t0);
-    let a1 = real & gt(t1, tmin) & closer(t1);
-    let hit = a0 | a1;
-    *t = select(hit, select(a0, t0, t1), *t);
-    *prim = select_i32(hit, id8, *prim);
+    // the nearer root past `tmin`: a farther one never beats the hit where the nearer does not
+    let (near, hit) = nearer_root(real, t0, t1, tmin);
+    take_packet(hit, near, I32x8::splat(id), t, prim);
 }
 
 #[cfg(test)]
