@@ -263,7 +263,7 @@ fn hit_children(
         let key = if frustum.is_some() {
             fnear[i]
         } else {
-            reduce_min(select(hit, near, F32x8::splat(f32::INFINITY)))
+            nearest_entry(hit, near)
         };
         out[count] = HitChild {
             node: n.child[i],
@@ -306,12 +306,18 @@ fn hit_children_all(
             node: n.child[i],
             lanes: hit,
             near,
-            key: reduce_min(select(hit, near, F32x8::splat(f32::INFINITY))),
+            key: nearest_entry(hit, near),
         };
         count += 1;
     }
     sort_farthest_first(&mut out[..count]);
     count
+}
+
+/// The nearest entry distance among the lanes `hit`: a child's sort key without a frustum.
+#[inline(always)]
+fn nearest_entry(hit: Mask, near: F32x8) -> f32 {
+    reduce_min(select(hit, near, F32x8::splat(f32::INFINITY)))
 }
 
 /// Orders hit children farthest first, so the nearest ends last.
