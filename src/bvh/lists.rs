@@ -96,8 +96,9 @@ impl Bvh8 {
 }
 
 /// The children set in `entered` (bit `i` = child `i`) by `key[i]`, largest first (of equal
-/// keys the lower slot first), and how many: the order the lists are handed down in, so that
-/// the child some ray enters nearest is taken back first.
+/// keys the higher slot first), and how many: the order the lists are handed down in, so that
+/// the child some ray enters nearest is taken back first, and of equal keys the lower slot, as
+/// the packet walk visits them (`packet::sort_farthest_first`).
 #[inline(always)]
 fn farthest_first(entered: u32, key: [f32; WIDTH]) -> ([usize; WIDTH], usize) {
     let mut order = [0; WIDTH];
@@ -107,7 +108,7 @@ fn farthest_first(entered: u32, key: [f32; WIDTH]) -> ([usize; WIDTH], usize) {
         let c = e.trailing_zeros() as usize;
         e &= e - 1;
         let mut j = k;
-        while j > 0 && key[order[j - 1]] < key[c] {
+        while j > 0 && key[order[j - 1]] <= key[c] {
             order[j] = order[j - 1];
             j -= 1;
         }
@@ -163,5 +164,38 @@ impl ListScratch {
             }
         }
         end
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{WIDTH, farthest_first};
+
+    /// Every set of entered children, with keys of few values (so many ties): the entered
+    /// slots, each once, keys never rising, and of equal keys the higher slot first.
+    #[test]
+    fn lists_are_handed_down_farthest_first_ties_higher_slot_first() {
+        for entered in 0..1u32 << WIDTH {
+            for seed in 0..4u32 {
+                let key: [f32; WIDTH] = std::array::from_fn(|i| {
+                    [0.0, 1.5, f32::INFINITY][(i as u32 * 7 + seed * 3) as usize % 3]
+                });
+                let (order, k) = farthest_first(entered, key);
+                assert_eq!(k, entered.count_ones() as usize);
+                let mut seen = 0u32;
+                for &c in &order[..k] {
+                    assert_eq!(entered >> c & 1, 1);
+                    seen |= 1 << c;
+                }
+                assert_eq!(seen, entered);
+                for w in order[..k].windows(2) {
+                    let (a, b) = (w[0], w[1]);
+                    assert!(
+                        key[a] > key[b] || (key[a] == key[b] && a > b),
+                        "{order:?} {key:?}"
+                    );
+                }
+            }
+        }
     }
 }
