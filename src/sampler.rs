@@ -98,7 +98,12 @@ impl Sampler {
     /// The offset of sample `s` of pixel `(x, y)` (`y = 0` the top row), from the pixel's
     /// lower-left corner, y up, each coordinate in `[0, 1)`.
     pub fn offset(&self, x: u32, y: u32, s: u32) -> Vec2 {
-        let k = self.grid();
+        self.offset_in_grid(self.grid(), x, y, s)
+    }
+
+    /// [`Sampler::offset`] with the grid's `k` ([`Sampler::grid`]) given, so that a loop over
+    /// many samples finds it once.
+    fn offset_in_grid(&self, k: u32, x: u32, y: u32, s: u32) -> Vec2 {
         let cell = |i: u32, t: f32| ((i as f32 + t) / k as f32).min(BELOW_ONE);
         match self.pattern {
             Pattern::Uniform => Vec2::new(cell(s % k, 0.5), cell(s / k, 0.5)),
@@ -118,10 +123,17 @@ impl Sampler {
     /// hit the depth and normal images show.
     pub fn pixel_offsets(&self, x: u32, y: u32, out: &mut [Vec2]) -> u32 {
         debug_assert_eq!(out.len(), self.count as usize);
+        let k = self.grid();
         for (s, o) in out.iter_mut().enumerate() {
-            *o = self.offset(x, y, s as u32);
+            *o = self.offset_in_grid(k, x, y, s as u32);
         }
         nearest_to_centre(out)
+    }
+
+    /// True if the offsets differ from pixel to pixel (random and jittered); the uniform
+    /// pattern gives every pixel the same ones.
+    pub fn varies_by_pixel(&self) -> bool {
+        self.pattern != Pattern::Uniform
     }
 
     /// The offset of pixel `(x, y)`'s sample nearest its centre (see [`Sampler::pixel_offsets`]):

@@ -3,7 +3,8 @@
 //! (bit for bit, on small images with filters whose halo crosses several bands, windows of odd
 //! sizes, both tracers); a uniform-sampled, box-filtered flat-coloured scene equals its
 //! 1-sample image; a pixel whose weights are all zero is black; the depth and normal images
-//! show the sample nearest the pixel centre.
+//! show the sample nearest the pixel centre; a band's samples lie where the sampler puts each
+//! pixel's own.
 
 mod common;
 
@@ -138,6 +139,36 @@ fn the_streamed_film_equals_the_whole_film() {
             }
         }
     }
+}
+
+#[test]
+fn a_bands_samples_lie_where_the_sampler_puts_each_pixels_own() {
+    use whitted::film::SampleBlock;
+    use whitted::math::Vec2;
+    for (pattern, count) in [
+        (Pattern::Uniform, 1),
+        (Pattern::Uniform, 4),
+        (Pattern::Jittered, 9),
+        (Pattern::Random, 1),
+        (Pattern::Random, 5),
+    ] {
+        let s = sampler(pattern, count);
+        let (x0, y0, width, rows) = (3, 5, 7, 4);
+        let block = SampleBlock::new(x0, y0, width, rows, 20, 12, &s, false);
+        let n = count as usize;
+        assert_eq!(block.offsets.len(), (width * rows) as usize * n);
+        assert_eq!(block.nearest.len(), (width * rows) as usize);
+        for (p, (chunk, &near)) in block.offsets.chunks(n).zip(&block.nearest).enumerate() {
+            let (x, y) = (x0 + p as u32 % width, y0 + p as u32 / width);
+            let mut want = vec![Vec2::ZERO; n];
+            let want_near = s.pixel_offsets(x, y, &mut want);
+            assert_eq!(chunk, &want[..], "{pattern:?} x{count}: pixel ({x}, {y})");
+            assert_eq!(near, want_near, "{pattern:?} x{count}: pixel ({x}, {y})");
+        }
+    }
+    // An empty band holds nothing.
+    let empty = SampleBlock::new(0, 0, 0, 8, 10, 10, &sampler(Pattern::Uniform, 4), false);
+    assert!(empty.offsets.is_empty() && empty.nearest.is_empty());
 }
 
 /// A flat colour filling the view: a plane lit by ambient light only, a background around it.

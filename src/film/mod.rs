@@ -139,15 +139,22 @@ impl SampleBlock {
         let spp = sampler.count;
         let pixels = width as usize * rows as usize;
         let slots = pixels * spp as usize;
-        let mut offsets = vec![Vec2::ZERO; slots];
-        let mut nearest = Vec::with_capacity(pixels);
-        for (p, chunk) in offsets.chunks_exact_mut(spp as usize).enumerate() {
-            let (x, y) = (
-                x0 + (p % width as usize) as u32,
-                y0 + (p / width as usize) as u32,
-            );
-            nearest.push(sampler.pixel_offsets(x, y, chunk));
-        }
+        let (offsets, nearest) = if sampler.varies_by_pixel() {
+            let mut offsets = vec![Vec2::ZERO; slots];
+            let mut nearest = vec![0; pixels];
+            // Pixel by pixel, rows top to bottom as the slots lie.
+            let pixels = (y0..y0 + rows).flat_map(|y| (x0..x0 + width).map(move |x| (x, y)));
+            let slots = offsets.chunks_exact_mut(spp as usize).zip(&mut nearest);
+            for ((x, y), (chunk, near)) in pixels.zip(slots) {
+                *near = sampler.pixel_offsets(x, y, chunk);
+            }
+            (offsets, nearest)
+        } else {
+            // Every pixel's offsets are the first pixel's.
+            let mut first = vec![Vec2::ZERO; spp as usize];
+            let near = sampler.pixel_offsets(x0, y0, &mut first);
+            (first.repeat(pixels), vec![near; pixels])
+        };
         let aux = if depth_normal { pixels } else { 0 };
         SampleBlock {
             x0,
