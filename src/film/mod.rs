@@ -143,9 +143,9 @@ impl SampleBlock {
             let mut offsets = vec![Vec2::ZERO; slots];
             let mut nearest = vec![0; pixels];
             // Pixel by pixel, rows top to bottom as the slots lie.
-            let pixels = (y0..y0 + rows).flat_map(|y| (x0..x0 + width).map(move |x| (x, y)));
-            let slots = offsets.chunks_exact_mut(spp as usize).zip(&mut nearest);
-            for ((x, y), (chunk, near)) in pixels.zip(slots) {
+            let coords = (y0..y0 + rows).flat_map(|y| (x0..x0 + width).map(move |x| (x, y)));
+            let each_pixel = offsets.chunks_exact_mut(spp as usize).zip(&mut nearest);
+            for ((x, y), (chunk, near)) in coords.zip(each_pixel) {
                 *near = sampler.pixel_offsets(x, y, chunk);
             }
             (offsets, nearest)
