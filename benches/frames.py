@@ -1,0 +1,119 @@
+#!/usr/bin/env python3
+"""Whole frames at 2 threads against 1, the figure of PERF.md's "Whole frames" rows.
+
+    benches/frames.py WHITTED ROUNDS [frames|ceiling|phases]
+
+WHITTED is a `whitted` binary (build it with `cargo build --release`). Two frames: the
+showcase (`scenes/showcase.txt`, 1280x960, shadows, transparent shadows, 8 bounces) and the
+course's 40k bunny (`scene6_07_bunny_mesh_40k.txt`, 800x800, shadows, from
+$WHITTED_COURSE_DIR or ../shared/scenes-6837). A frame's time is `parse_ms + render_ms +
+write_ms` of `--stats`. ONLY=showcase or ONLY=bunny runs one of them.
+
+- `frames` (the default): each round runs every frame at 1 thread and then at 2; prints the
+  medians, their ratio, best against best and the median of the rounds' own ratios.
+- `ceiling`: what the machine allows: each round runs a frame at 1 thread alone, then two
+  1-thread processes of it at once; the ceiling is 2 x alone / the slower of the two (medians).
+- `phases`: the bunny alone, each phase of `--stats` at 1 and 2 threads (medians), and what 2
+  threads lose against half of 1 thread's time.
+
+Nothing else should run meanwhile: on 2 cores, another job shows up as a lower ratio.
+"""
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+COURSE = os.environ.get("WHITTED_COURSE_DIR", os.path.join(REPO, "..", "shared", "scenes-6837"))
+OUT = tempfile.mkdtemp(prefix="whitted-frames-")
+
+
+def command(whitted, name, threads, out):
+    """The command line and working folder of frame `name` at `threads` threads."""
+    if name == "showcase":
+        return [whitted, "render", "scenes/showcase.txt", "-o", f"{OUT}/{out}.png",
+                "--size", "1280", "960", "--shadows", "--shade-back", "--transparent-shadows",
+                "--bounces", "8", "--threads", str(threads), "--stats"], REPO
+    return [whitted, "-input", "scene6_07_bunny_mesh_40k.txt", "-output", f"{OUT}/{out}.tga",
+            "-size", "800", "800", "-shadows", "-stats", "--threads", str(threads)], \
+        os.path.join(COURSE, "assignment6")
+
+
+def stats(stderr):
+    """The `key=value` pairs of the `stats:` line, as floats where they are numbers."""
+    line = [l for l in stderr.splitlines() if l.startswith("stats:")][-1]
+    kv = {}
+    for k, v in (f.split("=", 1) for f in line.split()[1:]):
+        try:
+            kv[k] = float(v)
+        except ValueError:
+            kv[k] = v
+    kv["frame_ms"] = kv["parse_ms"] + kv["render_ms"] + kv["write_ms"]
+    kv["rest_ms"] = kv["render_ms"] - kv["bvh_build_ms"]
+    return kv
+
+
+def run(whitted, name, threads, out="f"):
+    cmd, cwd = command(whitted, name, threads, out)
+    return stats(subprocess.run(cmd, capture_output=True, text=True, check=True, cwd=cwd).stderr)
+
+
+def pair(whitted, name):
+    """Two 1-thread processes of frame `name` at once; the slower's frame time."""
+    procs = []
+    for out in ("p", "q"):
+        cmd, cwd = command(whitted, name, 1, out)
+        procs.append(subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                      text=True, cwd=cwd))
+    times = []
+    for p in procs:
+        err = p.communicate()[1]
+        if p.returncode != 0:
+            sys.exit(err)
+        times.append(stats(err)["frame_ms"])
+    return max(times)
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    whitted, rounds = os.path.abspath(sys.argv[1]), int(sys.argv[2])
+    mode = sys.argv[3] if len(sys.argv) > 3 else "frames"
+    names = [os.environ["ONLY"]] if "ONLY" in os.environ else ["showcase", "bunny"]
+    if mode == "phases":
+        names = ["bunny"]
+    runs = {n: {1: [], 2: []} for n in names}
+    start = time.strftime("%H:%M:%S", time.gmtime())
+    for _ in range(rounds):
+        for n in names:
+            if mode == "ceiling":
+                runs[n][1].append(run(whitted, n, 1)["frame_ms"])
+                runs[n][2].append(pair(whitted, n))
+            else:
+                for t in (1, 2):
+                    runs[n][t].append(run(whitted, n, t))
+    end = time.strftime("%H:%M:%S", time.gmtime())
+    print(f"{mode}, {rounds} rounds, {start}-{end} UTC")
+    med = statistics.median
+    for n in names:
+        one, two = runs[n][1], runs[n][2]
+        if mode == "ceiling":
+            print(f"  {n:9s} alone {med(one):8.1f} ms, the slower of two at once "
+                  f"{med(two):8.1f} ms: ceiling {2 * med(one) / med(two):.3f}x")
+        elif mode == "phases":
+            for k in ("parse_ms", "bvh_build_ms", "rest_ms", "bounce0_cpu_ms", "write_ms",
+                      "frame_ms"):
+                a, b = med(r[k] for r in one), med(r[k] for r in two)
+                print(f"  {k:15s} 1 thread {a:8.2f}  2 threads {b:8.2f}  {a / b:.3f}x  "
+                      f"lost against half: {b - a / 2:6.2f} ms")
+        else:
+            a, b = [r["frame_ms"] for r in one], [r["frame_ms"] for r in two]
+            print(f"  {n:9s} 1 thread {med(a):8.1f}  2 threads {med(b):8.1f} ms: "
+                  f"{med(a) / med(b):.3f}x; best against best {min(a):.1f} / {min(b):.1f} "
+                  f"= {min(a) / min(b):.3f}x; median of the rounds' ratios "
+                  f"{med(x / y for x, y in zip(a, b)):.3f}x")
+
+
+main()
