@@ -402,6 +402,18 @@ pub fn trunc3(v: crate::math::Vec4) -> [usize; 3] {
     [t[0] as usize, t[1] as usize, t[2] as usize]
 }
 
+/// Each lane times 255, clamped to `[0, 255]` and truncated to a byte, NaN giving 0: the
+/// course's colour-to-byte rule (`(c * 255.0).clamp(0.0, 255.0) as u8`), 8 channels at once,
+/// which a scalar loop of `as u8` is not (its saturating checks do not vectorise).
+#[inline(always)]
+pub fn unit_to_bytes(v: F32x8) -> [u8; LANES] {
+    // `vmaxps` gives its second operand, 0, where the first is NaN
+    let clamped = (v * F32x8::splat(255.0))
+        .fast_max(F32x8::ZERO)
+        .fast_min(F32x8::splat(255.0));
+    clamped.fast_trunc_int().to_array().map(|b| b as u8)
+}
+
 /// The lanes as an array.
 #[inline(always)]
 pub fn lanes(a: F32x8) -> [f32; LANES] {
@@ -597,6 +609,35 @@ impl<T: Simd> Neg for Vec3v<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn unit_to_bytes_truncates_each_lane_as_a_saturating_cast_does() {
+        let mut values = vec![
+            f32::NAN,
+            -f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.0,
+            f32::MAX,
+            f32::MIN,
+            -1.0,
+            7.0,
+        ];
+        for k in 0..=256 {
+            let b = k as f32 / 255.0;
+            values.extend([b.next_down(), b, b.next_up()]);
+        }
+        for lanes in values.chunks(LANES) {
+            let got = unit_to_bytes(load_partial(lanes, 0.0));
+            for (i, &c) in lanes.iter().enumerate() {
+                assert_eq!(
+                    got[i],
+                    (c * 255.0).clamp(0.0, 255.0) as u8,
+                    "{c:?} in lane {i}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn compact_lanes_keeps_the_chosen_lanes_in_order() {
