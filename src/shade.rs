@@ -142,7 +142,9 @@ pub struct LightSample {
 /// The contribution of `light` to `s` seen along `dir`, with the shadow ray that decides it;
 /// `None` when the light adds nothing (surface facing away). On a solid texture it is the
 /// blend of each of its materials' own Blinn-Phong result.
-#[inline]
+///
+/// Always inlined into the shading loops, as [`scatter`] is (PERF.md, sitting 37).
+#[inline(always)]
 pub fn light_sample(
     scene: &Scene,
     s: &Surface,

@@ -129,6 +129,11 @@ impl Geometry {
     }
 
     /// The surface hit by `ray` at `t` on primitive `prim`: unit world normal, material, scene id.
+    ///
+    /// Always inlined into the shading loops: called, it returned its `Hit` through memory and
+    /// the caller's first loads of it waited on the stores (a store-forwarding stall per hit;
+    /// the showcase's render 12–13% slower at 1 thread, PERF.md sitting 37).
+    #[inline(always)]
     pub fn surface(&self, prim: u32, ray: &Ray, t: f32) -> Hit {
         let (kind, i) = self.locate(prim);
         let mut shading = None;

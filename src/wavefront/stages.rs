@@ -156,7 +156,9 @@ pub fn shade_hits(
         };
         out.color[px] += throughput * shade::ambient(scene, &s);
         for (index, light) in scene.lights.iter().enumerate() {
-            let Some(sample) = shade::light_sample(scene, &s, ray.dir, light, ctx.opts) else {
+            // borrowed, not moved out of its `Option`: the move was a copy through the stack
+            let sample = shade::light_sample(scene, &s, ray.dir, light, ctx.opts);
+            let Some(sample) = sample.as_ref() else {
                 continue;
             };
             if ctx.opts.shadows {
