@@ -96,17 +96,35 @@ impl Scene {
     /// interpolating their materials' parameters (the parser guarantees textures never refer
     /// back to themselves). These give the ambient term, the mirror and transparent colours and
     /// the index of refraction; direct light blends shading results ([`Scene::for_each_layer`]).
+    ///
+    /// Always inlined, the texture case apart: a plain material is then copied straight from
+    /// the scene into the caller's surface, where returned through memory it was copied again
+    /// and the copy waited on the stores (PERF.md, sitting 37).
+    #[inline(always)]
     pub fn phong_at(&self, index: u32, p: Vec3) -> Phong {
+        match &self.materials[index as usize] {
+            Material::Phong(m) => *m,
+            Material::Texture(_) => self.texture_phong_at(index, p),
+        }
+    }
+
+    /// [`Scene::phong_at`] of a texture.
+    #[inline(never)]
+    fn texture_phong_at(&self, index: u32, p: Vec3) -> Phong {
         match &self.materials[index as usize] {
             Material::Phong(m) => *m,
             Material::Texture(t) => {
                 let w = t.weight(p);
                 if w >= 1.0 {
-                    self.phong_at(t.a, p)
+                    self.texture_phong_at(t.a, p)
                 } else if w <= 0.0 {
-                    self.phong_at(t.b, p)
+                    self.texture_phong_at(t.b, p)
                 } else {
-                    lerp_phong(&self.phong_at(t.b, p), &self.phong_at(t.a, p), w)
+                    lerp_phong(
+                        &self.texture_phong_at(t.b, p),
+                        &self.texture_phong_at(t.a, p),
+                        w,
+                    )
                 }
             }
         }

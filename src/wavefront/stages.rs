@@ -151,13 +151,15 @@ pub fn shade_hits(
         if bounce == 0 {
             out.record_hit(px, hit.t, hit.shading);
         }
-        let Some(s) = shade::surface(scene, &ray, &hit, ctx.opts) else {
+        // The surface and each light's sample borrowed, not moved out of their `Option`s: a
+        // move was a copy through the stack, which waited on the stores (PERF.md, sitting 37)
+        let s = shade::surface(scene, &ray, &hit, ctx.opts);
+        let Some(s) = s.as_ref() else {
             continue;
         };
-        out.color[px] += throughput * shade::ambient(scene, &s);
+        out.color[px] += throughput * shade::ambient(scene, s);
         for (index, light) in scene.lights.iter().enumerate() {
-            // borrowed, not moved out of its `Option`: the move was a copy through the stack
-            let sample = shade::light_sample(scene, &s, ray.dir, light, ctx.opts);
+            let sample = shade::light_sample(scene, s, ray.dir, light, ctx.opts);
             let Some(sample) = sample.as_ref() else {
                 continue;
             };
@@ -174,7 +176,7 @@ pub fn shade_hits(
                 out.color[px] += throughput * sample.color;
             }
         }
-        let [mirror, refracted] = shade::scatter(&s, ray.dir, hit.normal, weight, bounce, ctx.opts);
+        let [mirror, refracted] = shade::scatter(s, ray.dir, hit.normal, weight, bounce, ctx.opts);
         if let Some(m) = mirror {
             let t = saturate(throughput * m.color);
             q.next.push_reflected(&m.ray, pixel, t, m.weight, node);
