@@ -2,6 +2,7 @@
 """Whole frames at 2 threads against 1, the figure of PERF.md's "Whole frames" rows.
 
     benches/frames.py WHITTED ROUNDS [frames|ceiling|phases]
+    benches/frames.py WHITTED ROUNDS compare OTHER
 
 WHITTED is a `whitted` binary (build it with `cargo build --release`). Two frames: the
 showcase (`scenes/showcase.txt`, 1280x960, shadows, transparent shadows, 8 bounces) and the
@@ -15,6 +16,9 @@ write_ms` of `--stats`. ONLY=showcase or ONLY=bunny runs one of them.
   1-thread processes of it at once; the ceiling is 2 x alone / the slower of the two (medians).
 - `phases`: the bunny alone, each phase of `--stats` at 1 and 2 threads (medians), and what 2
   threads lose against half of 1 thread's time.
+- `compare OTHER`: two binaries on the same frames, each round running both at 1 thread and
+  then at 2 (which goes first alternates by round); prints each one's median and best and the
+  median of the rounds' differences OTHER - WHITTED, with how often OTHER was faster.
 
 Nothing else should run meanwhile: on 2 cores, another job shows up as a lower ratio.
 """
@@ -76,6 +80,27 @@ def pair(whitted, name):
     return max(times)
 
 
+def compare(first, other, rounds, names):
+    """`compare` mode: both binaries in turn, round by round (see the module docs)."""
+    med = statistics.median
+    times = {(b, n, t): [] for b in (first, other) for n in names for t in (1, 2)}
+    start = time.strftime("%H:%M:%S", time.gmtime())
+    for k in range(rounds):
+        for n in names:
+            for t in (1, 2):
+                for b in ((first, other) if k % 2 == 0 else (other, first)):
+                    times[(b, n, t)].append(run(b, n, t)["frame_ms"])
+    end = time.strftime("%H:%M:%S", time.gmtime())
+    print(f"compare, {rounds} rounds, {start}-{end} UTC: A {first}, B {other}")
+    for n in names:
+        for t in (1, 2):
+            a, b = times[(first, n, t)], times[(other, n, t)]
+            d = [y - x for x, y in zip(a, b)]
+            print(f"  {n:9s} {t} thread{'s' if t > 1 else ' '}: A {med(a):8.1f} (best {min(a):8.1f}), "
+                  f"B {med(b):8.1f} (best {min(b):8.1f}) ms; B - A {med(d):+7.2f} ms, "
+                  f"B faster in {sum(x < 0 for x in d)} of {rounds}")
+
+
 def main():
     if len(sys.argv) < 3:
         sys.exit(__doc__)
@@ -84,6 +109,9 @@ def main():
     names = [os.environ["ONLY"]] if "ONLY" in os.environ else ["showcase", "bunny"]
     if mode == "phases":
         names = ["bunny"]
+    if mode == "compare":
+        compare(whitted, os.path.abspath(sys.argv[4]), rounds, names)
+        return
     runs = {n: {1: [], 2: []} for n in names}
     start = time.strftime("%H:%M:%S", time.gmtime())
     for _ in range(rounds):
