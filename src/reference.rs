@@ -23,7 +23,7 @@ use crate::math::{Ray, Vec3, barycentrics, saturate, transform_normal};
 use crate::options::{Progress, RenderOptions, stack_size};
 use crate::raytree::{RayTree, SegmentId, SegmentKind};
 use crate::scene::normals::interpolate;
-use crate::scene::{Camera, Object, Scene};
+use crate::scene::{Camera, Object, Phong, Scene};
 use crate::shade::{self, EPSILON, ShadeOptions};
 use crate::stats::RayCounts;
 
@@ -391,12 +391,14 @@ impl<'s> ReferenceTracer<'s> {
         let Some(hit) = hit else {
             return scene.background;
         };
-        let Some(s) = shade::surface(scene, ray, &hit, &self.opts) else {
+        let mut blend = Phong::default();
+        let Some(s) = shade::surface(scene, ray, &hit, &self.opts, &mut blend) else {
             return Vec3::ZERO;
         };
         let mut color = shade::ambient(scene, &s);
+        let view = ray.dir.normalize();
         for (index, light) in scene.lights.iter().enumerate() {
-            let Some(sample) = shade::light_sample(scene, &s, ray.dir, light, &self.opts) else {
+            let Some(sample) = shade::light_sample(scene, &s, view, light, &self.opts) else {
                 continue;
             };
             let visible = if self.opts.shadows {

@@ -55,7 +55,7 @@ impl Default for ShadeOptions {
 
 /// A hit ready to shade.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Surface {
+pub struct Surface<'m> {
     pub point: Vec3,
     /// The shading normal (a smooth mesh's interpolated one, else the geometric normal), on the
     /// side the ray arrived from (flipped with the geometric normal when `shade_back`).
@@ -66,23 +66,32 @@ pub struct Surface {
     /// True when the ray arrived from the side the geometric normal points to.
     pub front: bool,
     /// The material's parameters at the point (textures interpolated: the ambient term,
-    /// mirror and transparent colours and index of refraction come from here).
-    pub material: Phong,
+    /// mirror and transparent colours and index of refraction come from here): a plain
+    /// material's own, in the scene, or a texture's blend, in the caller's `blend`.
+    pub material: &'m Phong,
     /// The material's index, for direct light, which blends the shading of a texture's
     /// materials rather than their parameters ([`Scene::for_each_layer`]).
     pub material_index: u32,
 }
 
 /// Prepares `hit` for shading; `None` means the pixel contribution is black (a back face
-/// without `shade_back`).
+/// without `shade_back`). A texture's blended parameters are written to `blend`, which the
+/// surface then borrows; a plain material is borrowed from the scene, not copied (the copies
+/// waited on their own stores: PERF.md, sitting 38).
 #[inline]
-pub fn surface(scene: &Scene, ray: &Ray, hit: &Hit, opts: &ShadeOptions) -> Option<Surface> {
+pub fn surface<'m>(
+    scene: &'m Scene,
+    ray: &Ray,
+    hit: &Hit,
+    opts: &ShadeOptions,
+    blend: &'m mut Phong,
+) -> Option<Surface<'m>> {
     let front = hit.normal.dot(ray.dir) <= 0.0;
     if !front && !opts.shade_back {
         return None;
     }
     let point = ray.at(hit.t);
-    let material = scene.phong_at(hit.material, point);
+    let material = scene.material_at(hit.material, point, blend);
     let geometric = if front { hit.normal } else { -hit.normal };
     // Corner normals that disagree with the winding still shade the side the ray hit.
     let shading = if hit.shading.dot(geometric) < 0.0 {
@@ -112,14 +121,15 @@ pub fn ambient(scene: &Scene, s: &Surface) -> Vec3 {
 }
 
 /// Blinn-Phong for one light: `light * (kd max(n.l,0) + ks max(n.h,0)^q [* max(n.l,0)])`; zero
-/// when the surface faces away from the light.
+/// when the surface faces away from the light. `view` is the viewing ray's direction made unit
+/// (`dir.normalize()`), once for all the lights of a hit.
 #[inline]
-pub fn phong(m: &Phong, dir: Vec3, n: Vec3, l: Vec3, light: Vec3, specular_fix: bool) -> Vec3 {
+pub fn phong(m: &Phong, view: Vec3, n: Vec3, l: Vec3, light: Vec3, specular_fix: bool) -> Vec3 {
     let nl = n.dot(l);
     if nl <= 0.0 || nl.is_nan() {
         return Vec3::ZERO;
     }
-    let h = (l - dir.normalize()).normalize_or_zero();
+    let h = (l - view).normalize_or_zero();
     let nh = n.dot(h).max(0.0);
     let mut spec = nh.powf(m.exponent);
     if specular_fix {
@@ -139,16 +149,17 @@ pub struct LightSample {
     pub max_t: f32,
 }
 
-/// The contribution of `light` to `s` seen along `dir`, with the shadow ray that decides it;
-/// `None` when the light adds nothing (surface facing away). On a solid texture it is the
-/// blend of each of its materials' own Blinn-Phong result.
+/// The contribution of `light` to `s` seen along the unit direction `view` (the ray's
+/// `dir.normalize()`, made once for every light), with the shadow ray that decides it; `None`
+/// when the light adds nothing (surface facing away). On a solid texture it is the blend of
+/// each of its materials' own Blinn-Phong result.
 ///
 /// Always inlined into the shading loops, as [`scatter`] is (PERF.md, sitting 37).
 #[inline(always)]
 pub fn light_sample(
     scene: &Scene,
     s: &Surface,
-    dir: Vec3,
+    view: Vec3,
     light: &Light,
     opts: &ShadeOptions,
 ) -> Option<LightSample> {
@@ -160,7 +171,7 @@ pub fn light_sample(
     }
     let mut color = Vec3::ZERO;
     scene.for_each_layer(s.material_index, s.point, &mut |m, w| {
-        color += w * phong(m, dir, s.normal, ill.dir, ill.color, opts.specular_fix);
+        color += w * phong(m, view, s.normal, ill.dir, ill.color, opts.specular_fix);
     });
     let color = saturate(color);
     if color == Vec3::ZERO {
@@ -202,7 +213,7 @@ pub fn scatter(
     if bounce >= opts.bounces {
         return [None, None];
     }
-    let m = &s.material;
+    let m = s.material;
     let mut reflective = m.reflective;
     let mut transparent = m.transparent;
     let mut refracted = None;

@@ -79,10 +79,11 @@ pub fn pixel(
             };
             let point = ray.at(hit.t);
             let mut color = scene.ambient * base;
+            let view = ray.dir.normalize();
             for light in &scene.lights {
                 let ill = light.illuminate(point);
                 color += saturate(phong(
-                    &material, ray.dir, hit.normal, ill.dir, ill.color, false,
+                    &material, view, hit.normal, ill.dir, ill.color, false,
                 ));
             }
             saturate(color)

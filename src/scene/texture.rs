@@ -97,14 +97,30 @@ impl Scene {
     /// back to themselves). These give the ambient term, the mirror and transparent colours and
     /// the index of refraction; direct light blends shading results ([`Scene::for_each_layer`]).
     ///
-    /// Always inlined, the texture case apart: a plain material is then copied straight from
-    /// the scene into the caller's surface, where returned through memory it was copied again
-    /// and the copy waited on the stores (PERF.md, sitting 37).
+    /// Always inlined, the texture case apart, so a caller that takes one field of a plain
+    /// material (the transparent shadows: its transparent colour) reads only that field.
+    /// Shading borrows the parameters instead ([`Scene::material_at`]).
     #[inline(always)]
     pub fn phong_at(&self, index: u32, p: Vec3) -> Phong {
         match &self.materials[index as usize] {
             Material::Phong(m) => *m,
             Material::Texture(_) => self.texture_phong_at(index, p),
+        }
+    }
+
+    /// The Phong parameters of material `index` at world point `p`, as [`Scene::phong_at`]
+    /// gives them, borrowed: a plain material's from the scene, a texture's written to `blend`
+    /// first. A shaded surface holds this reference ([`crate::shade::Surface`]); it held a copy,
+    /// and in the wavefront's shading loop the copy was copied again through the stack, the
+    /// second copy waiting on the first one's stores (PERF.md, sitting 38).
+    #[inline(always)]
+    pub fn material_at<'m>(&'m self, index: u32, p: Vec3, blend: &'m mut Phong) -> &'m Phong {
+        match &self.materials[index as usize] {
+            Material::Phong(m) => m,
+            Material::Texture(_) => {
+                *blend = self.texture_phong_at(index, p);
+                blend
+            }
         }
     }
 
@@ -135,8 +151,16 @@ impl Scene {
     /// for a plain material; for a texture, each side's layers scaled by its weight, sides of
     /// weight 0 skipped. Shading results summed with these weights are the handout's
     /// "interpolated `Material::Shade`".
+    ///
+    /// Always inlined, the texture case apart, as [`Scene::phong_at`] is: a plain material's
+    /// shading then runs in its caller, not behind the recursion and a closure whose sum went
+    /// through memory (PERF.md, sitting 38).
+    #[inline(always)]
     pub fn for_each_layer(&self, index: u32, p: Vec3, f: &mut impl FnMut(&Phong, f32)) {
-        self.layers(index, p, 1.0, f);
+        match &self.materials[index as usize] {
+            Material::Phong(m) => f(m, 1.0),
+            Material::Texture(_) => self.layers(index, p, 1.0, f),
+        }
     }
 
     fn layers(&self, index: u32, p: Vec3, share: f32, f: &mut impl FnMut(&Phong, f32)) {

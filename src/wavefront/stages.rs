@@ -10,7 +10,7 @@ use crate::bvh::MAX_STREAM;
 use crate::geometry::{Geometry, ListBatch};
 use crate::math::{Ray, Vec2, Vec3, saturate};
 use crate::packet::{HitPacket, NO_HIT, RayPacket};
-use crate::scene::Camera;
+use crate::scene::{Camera, Phong};
 use crate::shade::{self, EPSILON};
 use crate::simd::{F32x8, LANES, bitmask, from_lanes, lanes, lanes_i32, mask_from_bits, mask_none};
 
@@ -128,6 +128,7 @@ pub fn shade_hits(
     out: &mut BandOutput<'_>,
 ) {
     let scene = ctx.scene;
+    let mut blend = Phong::default();
     for i in 0..q.rays.len() {
         let ray = q.rays.ray(i);
         let pixel = q.rays.pixel[i];
@@ -153,13 +154,14 @@ pub fn shade_hits(
         }
         // The surface and each light's sample borrowed, not moved out of their `Option`s: a
         // move was a copy through the stack, which waited on the stores (PERF.md, sitting 37)
-        let s = shade::surface(scene, &ray, &hit, ctx.opts);
+        let s = shade::surface(scene, &ray, &hit, ctx.opts, &mut blend);
         let Some(s) = s.as_ref() else {
             continue;
         };
         out.color[px] += throughput * shade::ambient(scene, s);
+        let view = ray.dir.normalize();
         for (index, light) in scene.lights.iter().enumerate() {
-            let sample = shade::light_sample(scene, s, ray.dir, light, ctx.opts);
+            let sample = shade::light_sample(scene, s, view, light, ctx.opts);
             let Some(sample) = sample.as_ref() else {
                 continue;
             };
