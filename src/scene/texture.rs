@@ -110,9 +110,9 @@ impl Scene {
 
     /// The Phong parameters of material `index` at world point `p`, as [`Scene::phong_at`]
     /// gives them, borrowed: a plain material's from the scene, a texture's written to `blend`
-    /// first. A shaded surface holds this reference ([`crate::shade::Surface`]); it held a copy,
-    /// and in the wavefront's shading loop the copy was copied again through the stack, the
-    /// second copy waiting on the first one's stores (PERF.md, sitting 38).
+    /// first. The shading's surface holds this reference; it held a copy, and in the
+    /// wavefront's shading loop the copy was copied again through the stack, the second copy
+    /// waiting on the first one's stores (PERF.md, sitting 38).
     #[inline(always)]
     pub fn material_at<'m>(&'m self, index: u32, p: Vec3, blend: &'m mut Phong) -> &'m Phong {
         match &self.materials[index as usize] {
