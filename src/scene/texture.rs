@@ -97,15 +97,13 @@ impl Scene {
     /// back to themselves). These give the ambient term, the mirror and transparent colours and
     /// the index of refraction; direct light blends shading results ([`Scene::for_each_layer`]).
     ///
-    /// Always inlined, the texture case apart, so a caller that takes one field of a plain
-    /// material (the transparent shadows: its transparent colour) reads only that field.
-    /// Shading borrows the parameters instead ([`Scene::material_at`]).
+    /// A copy of what [`Scene::material_at`] borrows, for callers that take one field (the
+    /// transparent shadows: the transparent colour); always inlined, so for a plain material
+    /// only that field is read. Shading borrows the parameters instead.
     #[inline(always)]
     pub fn phong_at(&self, index: u32, p: Vec3) -> Phong {
-        match &self.materials[index as usize] {
-            Material::Phong(m) => *m,
-            Material::Texture(_) => self.texture_phong_at(index, p),
-        }
+        let mut blend = Phong::default();
+        *self.material_at(index, p, &mut blend)
     }
 
     /// The Phong parameters of material `index` at world point `p`, as [`Scene::phong_at`]
