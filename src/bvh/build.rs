@@ -257,7 +257,7 @@ pub fn build(
         ordered: in_spatial_order(&refs, &rec),
         pass,
     };
-    let root = builder.subtree(&mut refs, rec, 1, &mut Bins::new());
+    let root = builder.subtree(&mut refs, rec, 1, &mut Search::new());
     let tree = Bvh8 {
         nodes: builder.nodes.into_vec(),
         root,
@@ -339,16 +339,11 @@ impl Mapping {
     }
 }
 
-/// Bin counts and bounds per axis, and the SAH sweep's scratch (kept here so that a node's
-/// search does not first fill a kilobyte of stack).
+/// Bin counts and bounds per axis.
 #[derive(Clone)]
 struct Bins {
     counts: [[u32; MAX_BINS]; 3],
     boxes: [[Box4; MAX_BINS]; 3],
-    /// Area times blocks of everything right of each boundary (one axis at a time).
-    right_cost: [f32; MAX_BINS],
-    /// The bounds of everything right of each boundary (one axis at a time).
-    right_box: [Box4; MAX_BINS],
 }
 
 impl Bins {
@@ -356,8 +351,6 @@ impl Bins {
         Bins {
             counts: [[0; MAX_BINS]; 3],
             boxes: [[Box4::EMPTY; MAX_BINS]; 3],
-            right_cost: [0.0; MAX_BINS],
-            right_box: [Box4::EMPTY; MAX_BINS],
         }
     }
 
@@ -423,6 +416,26 @@ impl Bins {
     }
 }
 
+/// What one thread's split searches reuse from node to node: the bins, and the SAH sweep's
+/// arrays (kept here so that a search does not first fill a kilobyte of stack).
+struct Search {
+    bins: Bins,
+    /// Area times blocks of everything right of each boundary (one axis at a time).
+    right_cost: [f32; MAX_BINS],
+    /// The bounds of everything right of each boundary (one axis at a time).
+    right_box: [Box4; MAX_BINS],
+}
+
+impl Search {
+    fn new() -> Search {
+        Search {
+            bins: Bins::new(),
+            right_cost: [0.0; MAX_BINS],
+            right_box: [Box4::EMPTY; MAX_BINS],
+        }
+    }
+}
+
 impl<S: LeafSink> Builder<'_, S> {
     /// Blocks a leaf of `n` primitives takes.
     #[inline(always)]
@@ -431,14 +444,19 @@ impl<S: LeafSink> Builder<'_, S> {
     }
 
     /// The cheapest binned split of `refs` by SAH, or `None` when every centroid coincides.
-    fn find(&self, refs: &[PrimRef], rec: &Record, bins: &mut Bins) -> Option<Split> {
+    fn find(&self, refs: &[PrimRef], rec: &Record, search: &mut Search) -> Option<Split> {
         let m = Mapping::new(&rec.centroids, refs.len(), self.settings.max_bins);
         if m.scale.truncate() == glam::Vec3::ZERO {
             return None;
         }
         let nb = m.nb;
+        let Search {
+            bins,
+            right_cost,
+            right_box,
+        } = search;
         if refs.len() > self.pass {
-            let sums = refs
+            *bins = refs
                 .par_chunks(self.pass)
                 .map(|chunk| {
                     let mut b = Bins::new();
@@ -449,23 +467,16 @@ impl<S: LeafSink> Builder<'_, S> {
                     a.merge(&b, nb);
                     a
                 });
-            (bins.counts, bins.boxes) = (sums.counts, sums.boxes);
         } else {
             bins.clear(nb);
             bins.add_all(refs, &m);
         }
         let mut best: Option<Split> = None;
-        let Bins {
-            counts,
-            boxes,
-            right_cost,
-            right_box,
-        } = bins;
         for axis in 0..3 {
             if m.scale[axis] == 0.0 {
                 continue;
             }
-            let (counts, boxes) = (&counts[axis], &boxes[axis]);
+            let (counts, boxes) = (&bins.counts[axis], &bins.boxes[axis]);
             // Sweep from the right: area times blocks of everything right of each boundary.
             let mut acc = Box4::EMPTY;
             let mut n = 0;
@@ -546,7 +557,13 @@ impl<S: LeafSink> Builder<'_, S> {
     }
 
     /// Builds the subtree over `refs` as a node at `depth` (the root is at 1), or a leaf.
-    fn subtree(&self, refs: &mut [PrimRef], rec: Record, depth: usize, bins: &mut Bins) -> NodeRef {
+    fn subtree(
+        &self,
+        refs: &mut [PrimRef],
+        rec: Record,
+        depth: usize,
+        search: &mut Search,
+    ) -> NodeRef {
         let n = refs.len();
         let single = rec.tags.count_ones() == 1;
         if single && (n <= self.settings.min_leaf || depth > MAX_DEPTH || n == 1) {
@@ -565,7 +582,7 @@ impl<S: LeafSink> Builder<'_, S> {
         let split = if depth >= MAX_DEPTH {
             None
         } else {
-            self.find(refs, &rec, bins)
+            self.find(refs, &rec, search)
         };
         if single && n <= self.settings.max_leaf {
             let area = rec.bounds.half_area();
@@ -614,7 +631,7 @@ impl<S: LeafSink> Builder<'_, S> {
             let s = if depth >= MAX_DEPTH {
                 None
             } else {
-                self.find(part, &crec, bins)
+                self.find(part, &crec, search)
             };
             if s.is_none()
                 && crec.tags.count_ones() == 1
@@ -657,7 +674,7 @@ impl<S: LeafSink> Builder<'_, S> {
                 .map(|(i, s)| {
                     (
                         i,
-                        self.subtree(s, children[i].rec, depth + 1, &mut Bins::new()),
+                        self.subtree(s, children[i].rec, depth + 1, &mut Search::new()),
                     )
                 })
                 .collect();
@@ -668,7 +685,7 @@ impl<S: LeafSink> Builder<'_, S> {
             for (kid, c) in kids.iter_mut().zip(children.iter()) {
                 let part = &mut refs[c.start..c.start + c.len];
                 *kid = (
-                    self.subtree(part, c.rec, depth + 1, bins),
+                    self.subtree(part, c.rec, depth + 1, search),
                     c.rec.bounds.aabb(),
                 );
             }
