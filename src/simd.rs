@@ -402,6 +402,23 @@ pub fn trunc3(v: crate::math::Vec4) -> [usize; 3] {
     [t[0] as usize, t[1] as usize, t[2] as usize]
 }
 
+/// One 8-lane value from two 4-lane halves: `lo` in lanes 0–3, `hi` in lanes 4–7 (one
+/// `vinsertf128`).
+#[inline(always)]
+pub fn join_halves(lo: crate::math::Vec4, hi: crate::math::Vec4) -> F32x8 {
+    bytemuck::cast([lo.to_array(), hi.to_array()])
+}
+
+/// The two 4-lane halves of `v`, lanes 0–3 then 4–7: [`join_halves`] undone.
+#[inline(always)]
+pub fn split_halves(v: F32x8) -> (crate::math::Vec4, crate::math::Vec4) {
+    let [lo, hi]: [[f32; 4]; 2] = bytemuck::cast(v);
+    (
+        crate::math::Vec4::from_array(lo),
+        crate::math::Vec4::from_array(hi),
+    )
+}
+
 /// Each lane times 255, clamped to `[0, 255]` and truncated to a byte, NaN giving 0: the
 /// course's colour-to-byte rule (`(c * 255.0).clamp(0.0, 255.0) as u8`), 8 channels at once,
 /// which a scalar loop of `as u8` is not (its saturating checks do not vectorise).
@@ -665,6 +682,23 @@ mod tests {
         q.set_lane(3, Vec3::ONE);
         assert_eq!(q.lane(3), Vec3::ONE);
         assert_eq!(q.lane(2), vs[2]);
+    }
+
+    #[test]
+    fn halves_join_in_lane_order_and_split_back() {
+        use crate::math::Vec4;
+        let (lo, hi) = (
+            Vec4::new(1.0, -0.0, f32::INFINITY, 4.0),
+            Vec4::new(5.0, 6.0, -7.5, 8.0),
+        );
+        let v = join_halves(lo, hi);
+        assert_eq!(
+            lanes(v),
+            [1.0, -0.0, f32::INFINITY, 4.0, 5.0, 6.0, -7.5, 8.0]
+        );
+        assert!(lanes(v)[1].is_sign_negative());
+        let (l, h) = split_halves(v);
+        assert_eq!((l.to_array(), h.to_array()), (lo.to_array(), hi.to_array()));
     }
 
     #[test]

@@ -23,7 +23,7 @@ use rayon::prelude::*;
 
 use super::arena::Arena;
 use super::{Aabb, Bvh8, Leaf, MAX_DEPTH, Node8, NodeRef, WIDTH, padded};
-use crate::simd::trunc3;
+use crate::simd::{F32x8, join_halves, min, split_halves, trunc3};
 
 /// The most bins per axis.
 pub const MAX_BINS: usize = 32;
@@ -156,6 +156,21 @@ impl Box4 {
             max: self.max.truncate(),
         }
     }
+
+    /// The box a bin holds ([`bin_bounds`] undone).
+    #[inline(always)]
+    fn of_bin(b: F32x8) -> Box4 {
+        let (min, neg_max) = split_halves(b);
+        Box4 { min, max: -neg_max }
+    }
+}
+
+/// Bounds as a bin holds them: the minimum in lanes 0–3 and the negated maximum in lanes 4–7,
+/// so that the union of two is one 8-lane `min` (the empty box: +infinity in every lane).
+/// Negation is exact, so [`Box4::of_bin`] gives back the very bounds.
+#[inline(always)]
+fn bin_bounds(min: Vec4, max: Vec4) -> F32x8 {
+    join_halves(min, -max)
 }
 
 /// What a node's builder knows of its primitives: bounds, centroid bounds (doubled), and the
@@ -339,25 +354,26 @@ impl Mapping {
     }
 }
 
-/// Bin counts and bounds per axis.
+/// Bin counts and bounds per axis, the bounds as [`bin_bounds`] gives them: growing a bin by a
+/// reference is one `min` and one store, not two of each.
 #[derive(Clone)]
 struct Bins {
     counts: [[u32; MAX_BINS]; 3],
-    boxes: [[Box4; MAX_BINS]; 3],
+    boxes: [[F32x8; MAX_BINS]; 3],
 }
 
 impl Bins {
     fn new() -> Bins {
         Bins {
             counts: [[0; MAX_BINS]; 3],
-            boxes: [[Box4::EMPTY; MAX_BINS]; 3],
+            boxes: [[F32x8::splat(f32::INFINITY); MAX_BINS]; 3],
         }
     }
 
     fn clear(&mut self, nb: usize) {
         for axis in 0..3 {
             self.counts[axis][..nb].fill(0);
-            self.boxes[axis][..nb].fill(Box4::EMPTY);
+            self.boxes[axis][..nb].fill(F32x8::splat(f32::INFINITY));
         }
     }
 
@@ -384,6 +400,7 @@ impl Bins {
     #[inline(always)]
     fn add_axes<const LIVE: u32>(&mut self, refs: &[PrimRef], m: &Mapping) {
         let mut add = |r: &PrimRef, b: [usize; 3]| {
+            let bounds = bin_bounds(r.min, r.max);
             for (axis, b) in b.into_iter().enumerate() {
                 if LIVE >> axis & 1 == 0 {
                     continue;
@@ -391,7 +408,7 @@ impl Bins {
                 // (the mask only tells the compiler the index is in range)
                 let b = b & (MAX_BINS - 1);
                 self.counts[axis][b] += 1;
-                self.boxes[axis][b].grow(r.min, r.max);
+                self.boxes[axis][b] = min(self.boxes[axis][b], bounds);
             }
         };
         let mut pairs = refs.chunks_exact(2);
@@ -410,7 +427,7 @@ impl Bins {
         for axis in 0..3 {
             for b in 0..nb {
                 self.counts[axis][b] += o.counts[axis][b];
-                self.boxes[axis][b] = self.boxes[axis][b].union(&o.boxes[axis][b]);
+                self.boxes[axis][b] = min(self.boxes[axis][b], o.boxes[axis][b]);
             }
         }
     }
@@ -481,7 +498,7 @@ impl<S: LeafSink> Builder<'_, S> {
             let mut acc = Box4::EMPTY;
             let mut n = 0;
             for i in (1..nb).rev() {
-                acc = acc.union(&boxes[i]);
+                acc = acc.union(&Box4::of_bin(boxes[i]));
                 n += counts[i];
                 right_box[i] = acc;
                 right_cost[i] = if n == 0 {
@@ -493,7 +510,7 @@ impl<S: LeafSink> Builder<'_, S> {
             let mut acc = Box4::EMPTY;
             let mut n = 0;
             for i in 1..nb {
-                acc = acc.union(&boxes[i - 1]);
+                acc = acc.union(&Box4::of_bin(boxes[i - 1]));
                 n += counts[i - 1];
                 // an empty right side costs infinity
                 let cost = acc.half_area() * self.blocks(n) + right_cost[i];
@@ -927,6 +944,36 @@ mod tests {
         let v = |a: Vec4| xyz(a).to_array();
         let (b, c) = (&r.bounds, &r.centroids);
         ([v(b.min), v(b.max), v(c.min), v(c.max)], r.tags)
+    }
+
+    #[test]
+    fn bins_hold_boxes_exactly_and_unite_them_by_one_min() {
+        let boxes = [
+            prim_ref(3, [-1.0, 0.0, 2.0], [1.0, 0.5, 3.0]),
+            prim_ref(9, [-0.0, -4.0, 1.0], [0.0, -1.0, 8.0]),
+            prim_ref(1, [2.0, -2.0, -6.0], [2.5, 7.0, -5.0]),
+        ];
+        let bits = |b: &Box4| {
+            let v = |a: Vec4| xyz(a).to_array().map(f32::to_bits);
+            (v(b.min), v(b.max))
+        };
+        let mut united = Box4::EMPTY;
+        let mut bin = F32x8::splat(f32::INFINITY);
+        assert_eq!(bits(&Box4::of_bin(bin)), bits(&Box4::EMPTY));
+        for r in &boxes {
+            let b = Box4::of_bin(bin_bounds(r.min, r.max));
+            assert_eq!(
+                bits(&b),
+                bits(&Box4 {
+                    min: r.min,
+                    max: r.max
+                })
+            );
+            united.grow(r.min, r.max);
+            bin = min(bin, bin_bounds(r.min, r.max));
+            assert_eq!(bits(&Box4::of_bin(bin)), bits(&united));
+        }
+        assert_eq!(Box4::of_bin(bin).aabb(), united.aabb());
     }
 
     #[test]
