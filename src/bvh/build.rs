@@ -167,7 +167,8 @@ impl Box4 {
 
 /// Bounds as a bin holds them: the minimum in lanes 0–3 and the negated maximum in lanes 4–7,
 /// so that the union of two is one 8-lane `min` (the empty box: +infinity in every lane).
-/// Negation is exact, so [`Box4::of_bin`] gives back the very bounds.
+/// Negation flips sign bits only: exact, and no arithmetic on the w lanes' index and tag bits
+/// ([`PrimRef`]), so [`Box4::of_bin`] gives back the very bounds.
 #[inline(always)]
 fn bin_bounds(min: Vec4, max: Vec4) -> F32x8 {
     join_halves(min, -max)
