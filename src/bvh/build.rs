@@ -166,12 +166,18 @@ impl Box4 {
 }
 
 /// Bounds as a bin holds them: the minimum in lanes 0–3 and the negated maximum in lanes 4–7,
-/// so that the union of two is one 8-lane `min` (the empty box: +infinity in every lane).
+/// so that the union of two is one 8-lane `min` (the empty box: [`empty_bin`]).
 /// Negation flips sign bits only: exact, and no arithmetic on the w lanes' index and tag bits
 /// ([`PrimRef`]), so [`Box4::of_bin`] gives back the very bounds.
 #[inline(always)]
 fn bin_bounds(min: Vec4, max: Vec4) -> F32x8 {
     join_halves(min, -max)
+}
+
+/// The empty box as a bin holds it ([`bin_bounds`]): +infinity in every lane.
+#[inline(always)]
+fn empty_bin() -> F32x8 {
+    F32x8::splat(f32::INFINITY)
 }
 
 /// What a node's builder knows of its primitives: bounds, centroid bounds (doubled), and the
@@ -367,14 +373,14 @@ impl Bins {
     fn new() -> Bins {
         Bins {
             counts: [[0; MAX_BINS]; 3],
-            boxes: [[F32x8::splat(f32::INFINITY); MAX_BINS]; 3],
+            boxes: [[empty_bin(); MAX_BINS]; 3],
         }
     }
 
     fn clear(&mut self, nb: usize) {
         for axis in 0..3 {
             self.counts[axis][..nb].fill(0);
-            self.boxes[axis][..nb].fill(F32x8::splat(f32::INFINITY));
+            self.boxes[axis][..nb].fill(empty_bin());
         }
     }
 
@@ -959,7 +965,7 @@ mod tests {
             (v(b.min), v(b.max))
         };
         let mut united = Box4::EMPTY;
-        let mut bin = F32x8::splat(f32::INFINITY);
+        let mut bin = empty_bin();
         assert_eq!(bits(&Box4::of_bin(bin)), bits(&Box4::EMPTY));
         for r in &boxes {
             let b = Box4::of_bin(bin_bounds(r.min, r.max));
