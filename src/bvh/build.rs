@@ -174,10 +174,11 @@ fn bin_bounds(min: Vec4, max: Vec4) -> F32x8 {
     join_halves(min, -max)
 }
 
-/// The empty box as a bin holds it ([`bin_bounds`]): +infinity in every lane.
+/// The empty box as a bin holds it: [`Box4::EMPTY`] through [`bin_bounds`] (+infinity in
+/// every lane).
 #[inline(always)]
 fn empty_bin() -> F32x8 {
-    F32x8::splat(f32::INFINITY)
+    bin_bounds(Box4::EMPTY.min, Box4::EMPTY.max)
 }
 
 /// What a node's builder knows of its primitives: bounds, centroid bounds (doubled), and the
