@@ -139,6 +139,7 @@ fn parse_obj_in_chunks(bytes: &[u8], path: &Path, chunk_bytes: usize) -> Result<
             until => read_faces(
                 chunks[k],
                 until.flatten().unwrap_or(usize::MAX),
+                points[k].first_face,
                 (first_vertex[k], first_normal[k]),
                 (&vertices, &vertex_normals),
             ),
@@ -302,6 +303,77 @@ mod tests {
             e.to_string()
                 .starts_with("m.obj:2:1: expected an OBJ statement")
         );
+    }
+
+    #[test]
+    fn quick_lines_read_what_the_general_reading_reads() {
+        // A line starting with a space is read the general way, so each line is read both
+        // ways; a fault's column is then one further along.
+        let base = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nvn 0 1 1\n";
+        let lines = [
+            "f 1 2 3",
+            "f 1 2 3 4",
+            "f\t1 2\t3\r",
+            "f 1/1/1 2/2/2 3/3/2",
+            "f 1//1 2//2 3//1",
+            "f 1/ 2/ 3/",
+            "f 1// 2// 3//",
+            "f 1/2/ 2/2/ 3/2/",
+            "f 1/x/1 2 3",
+            "f 1/2/1/4 2 3",
+            "f -1 -2 -3",
+            "f -0 1 2",
+            "f +1 2 3",
+            "f 0 1 2",
+            "f 1 2 99",
+            "f 1 2 4//9",
+            "f 1 1 2",
+            "f 1 2",
+            "f",
+            "f ",
+            "f 1 2 3 # comment",
+            "f 001 2 3",
+            "f 1 2 3\u{a0}",
+            "f 1 2\u{2003}3",
+            "f 1 2 0000000000000000003",
+            "f 1 2 -9223372036854775808",
+            "f 1 2 3 -1//2",
+            "v 1 2 3",
+            "v 1 2",
+            "v 1 2 3 4",
+            "v 1e3 2 3",
+            "v 1 2 nan",
+            "v 1 2 inf",
+            "v 1\u{a0}2 3",
+            "v -0 .5 5.",
+            "v 1 2 3abc",
+            "v 0.1234567 3 16777217",
+            "vn 0 0 0",
+            "vn 0 0 2",
+            "vn 1 2",
+            "vn 1 2 x",
+        ];
+        let mut quick_ok = 0;
+        for line in lines {
+            let read = |pad: &str| {
+                let text = format!("{base}{pad}{line}\nf 1 2 3\n");
+                parse_obj(&text, Path::new("m.obj")).map_err(|e| e.to_string())
+            };
+            match (read(""), read(" ")) {
+                (Ok(quick), Ok(general)) => {
+                    assert_eq!(quick, general, "{line:?}");
+                    quick_ok += 1;
+                }
+                (Err(quick), Err(general)) => {
+                    let (place, msg) = quick.split_at(quick.find(": ").unwrap());
+                    let col: usize = place.rsplit(':').next().unwrap().parse().unwrap();
+                    let line_no = &place[..place.len() - col.to_string().len()];
+                    assert_eq!(general, format!("{line_no}{}{msg}", col + 1), "{line:?}");
+                }
+                (quick, general) => panic!("{line:?}: {quick:?} / {general:?}"),
+            }
+        }
+        assert!(quick_ok > 15, "{quick_ok}");
     }
 
     /// A generated mesh of `n` quads with every kind of line: normals, `a//n` and `a/t/n`
