@@ -107,30 +107,25 @@ pub(super) fn read_points(chunk: &str) -> Points {
             vertices: p.vertices.len(),
             normals: p.normals.len(),
         };
-        match text.as_bytes() {
+        let quick = match text.as_bytes() {
             [b'f', s, ..] if is_ascii_space(*s) => {
                 p.first_face = p.first_face.or_else(|| Some(face_here(&p)));
                 continue;
             }
             [b'v', s, ..] if is_ascii_space(*s) => {
-                if let Some(v) = quick_coordinates(&text[2..]) {
-                    if push(&mut p.vertices, v).is_none() {
-                        p.stop = Some(Stop::OutOfMemory);
-                        return p;
-                    }
-                    continue;
-                }
+                quick_coordinates(&text[2..]).map(|v| (&mut p.vertices, v))
             }
-            [b'v', b'n', s, ..] if is_ascii_space(*s) => {
-                if let Some(n) = quick_coordinates(&text[3..]).and_then(Vec3::try_normalize) {
-                    if push(&mut p.normals, n).is_none() {
-                        p.stop = Some(Stop::OutOfMemory);
-                        return p;
-                    }
-                    continue;
-                }
+            [b'v', b'n', s, ..] if is_ascii_space(*s) => quick_coordinates(&text[3..])
+                .and_then(Vec3::try_normalize)
+                .map(|n| (&mut p.normals, n)),
+            _ => None,
+        };
+        if let Some((list, point)) = quick {
+            if push(list, point).is_none() {
+                p.stop = Some(Stop::OutOfMemory);
+                return p;
             }
-            _ => {}
+            continue;
         }
         let mut words = words_with_columns(text);
         let Some((col, keyword)) = words.next() else {
@@ -254,9 +249,7 @@ pub(super) fn quick_corners(
     let b = rest.as_bytes();
     let mut i = 0;
     loop {
-        while i < b.len() && is_ascii_space(b[i]) {
-            i += 1;
-        }
+        i = skip_spaces(b, i);
         if i == b.len() {
             return Some(());
         }
@@ -434,10 +427,8 @@ pub(super) fn quick_coordinates(rest: &str) -> Option<Vec3> {
     let mut xyz = [0.0f32; 3];
     let mut i = 0;
     for c in &mut xyz {
-        while i < b.len() && is_ascii_space(b[i]) {
-            i += 1;
-        }
-        let start = i;
+        let start = skip_spaces(b, i);
+        i = start;
         while i < b.len() && !is_ascii_space(b[i]) {
             i += 1;
         }
@@ -591,6 +582,16 @@ fn words(line: &str, ascii: bool) -> impl Iterator<Item = (usize, &str)> {
         rest = &trimmed[end..];
         Some((at, word))
     })
+}
+
+/// The position of the first byte of `b` at or after `i` that is not ASCII white space
+/// (`b.len()` if none).
+#[inline(always)]
+fn skip_spaces(b: &[u8], i: usize) -> usize {
+    b[i..]
+        .iter()
+        .position(|&c| !is_ascii_space(c))
+        .map_or(b.len(), |k| i + k)
 }
 
 /// The ASCII characters `char::is_whitespace` accepts (`u8::is_ascii_whitespace` leaves out
