@@ -19,6 +19,7 @@
 //! at `t = -f32::MAX`, as in the course.
 
 use crate::math::{Ray, Vec2, Vec3};
+use crate::simd::{F32x8, LANES, Vec3x8, from_lanes};
 
 /// A camera with an orthonormal frame (`direction`, `up`, `horizontal = direction x up`).
 #[derive(Clone, Debug, PartialEq)]
@@ -86,6 +87,27 @@ impl Camera {
         }
     }
 
+    /// [`Camera::generate_ray`] of eight screen points, lane `i` at `(x[i], y[i])`: the rays'
+    /// origins and directions, bit for bit those of the scalar function (the same operations
+    /// in the same order, lane by lane).
+    pub fn generate_ray_packet(&self, x: F32x8, y: F32x8) -> (Vec3x8, Vec3x8) {
+        let screen = F32x8::splat(self.screen);
+        let (h, v) = (
+            Vec3x8::splat(self.horizontal) * (x * screen),
+            Vec3x8::splat(self.up) * (y * screen),
+        );
+        match self.kind {
+            Projection::Orthographic { .. } => (
+                Vec3x8::splat(self.center) + h + v,
+                Vec3x8::splat(self.direction),
+            ),
+            Projection::Perspective { .. } => (
+                Vec3x8::splat(self.center),
+                (Vec3x8::splat(self.direction) + h + v).normalize(),
+            ),
+        }
+    }
+
     /// The screen point of pixel `(x, y)`'s centre in a `width` x `height` image, `y = 0` being
     /// the top row. The square screen covers the larger dimension; the smaller one is cropped.
     pub fn pixel_point(x: u32, y: u32, width: u32, height: u32) -> Vec2 {
@@ -106,6 +128,24 @@ impl Camera {
         Vec2::new(dx / side, dy / side)
     }
 
+    /// [`Camera::sample_screen`] of eight samples, lane `i` that of pixel `(x[i], y[i])` at
+    /// `offset[i]`: the screen points' coordinates, bit for bit those of the scalar function.
+    pub fn sample_screen_packet(
+        x: [u32; LANES],
+        y: [u32; LANES],
+        offset: [Vec2; LANES],
+        width: u32,
+        height: u32,
+    ) -> (F32x8, F32x8) {
+        let side = F32x8::splat(width.max(height) as f32);
+        let j = y.map(|y| (height - 1 - y) as f32);
+        let dx = (from_lanes(x.map(|x| x as f32)) - F32x8::splat(width as f32 * 0.5))
+            + from_lanes(offset.map(|o| o.x));
+        let dy =
+            (from_lanes(j) - F32x8::splat(height as f32 * 0.5)) + from_lanes(offset.map(|o| o.y));
+        (dx / side, dy / side)
+    }
+
     /// The screen point of a position inside the image in pixel units from its top-left corner
     /// (x to the right, y down, continuous): the inverse of what the witness camera projects.
     pub fn sample_point(px: f32, py: f32, width: u32, height: u32) -> Vec2 {
@@ -120,6 +160,7 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd::lanes;
 
     #[test]
     fn up_is_orthogonalised() {
@@ -176,6 +217,60 @@ mod tests {
         for (x, y) in [(0, 0), (5, 7), (399, 199)] {
             let p = Camera::sample_point(x as f32 + 0.5, y as f32 + 0.5, 400, 200);
             assert_eq!(p, Camera::pixel_point(x, y, 400, 200));
+        }
+    }
+
+    #[test]
+    fn packet_rays_are_the_scalar_rays_bit_for_bit() {
+        let mut state = 0x9e37_79b9_u32;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 17;
+            state ^= state << 5;
+            state
+        };
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for c in 0..200 {
+            let mut unit = || (next() >> 8) as f32 / (1u32 << 24) as f32;
+            let kind = if c % 2 == 0 {
+                Projection::Perspective {
+                    angle: 0.1 + 2.5 * unit(),
+                }
+            } else {
+                Projection::Orthographic {
+                    size: 0.5 + 20.0 * unit(),
+                }
+            };
+            let v = |unit: &mut dyn FnMut() -> f32| {
+                Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * 10.0
+            };
+            let (center, direction) = (v(&mut unit), v(&mut unit));
+            let up = direction.cross(v(&mut unit));
+            let camera = Camera::new(kind, center, direction, up);
+            let (width, height) = (1 + next() % 2000, 1 + next() % 2000);
+            let x: [u32; LANES] = std::array::from_fn(|_| next() % width);
+            let y: [u32; LANES] = std::array::from_fn(|_| next() % height);
+            let offset: [Vec2; LANES] = std::array::from_fn(|_| {
+                let mut unit = || (next() >> 8) as f32 / (1u32 << 24) as f32;
+                Vec2::new(unit(), unit())
+            });
+            let (sx, sy) = Camera::sample_screen_packet(x, y, offset, width, height);
+            let (origin, dir) = camera.generate_ray_packet(sx, sy);
+            for i in 0..LANES {
+                let point = Camera::sample_screen(x[i], y[i], offset[i], width, height);
+                assert_eq!(
+                    (point.x.to_bits(), point.y.to_bits()),
+                    (lanes(sx)[i].to_bits(), lanes(sy)[i].to_bits()),
+                    "camera {c} lane {i}: screen point"
+                );
+                let ray = camera.generate_ray(point);
+                assert_eq!(
+                    bits(ray.origin),
+                    bits(origin.lane(i)),
+                    "camera {c} lane {i}"
+                );
+                assert_eq!(bits(ray.dir), bits(dir.lane(i)), "camera {c} lane {i}");
+            }
         }
     }
 }

@@ -11,7 +11,7 @@ use bumpalo::collections::Vec as BVec;
 use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
 use crate::raytree::SegmentKind;
-use crate::simd::{F32x8, LANES, Vec3x8, load_partial, mask_first, prefetch_all};
+use crate::simd::{F32x8, LANES, Vec3x8, lanes, load_partial, mask_first, prefetch_all};
 
 /// Marks a ray that is not recorded in a ray tree.
 pub const NO_NODE: u32 = u32::MAX;
@@ -47,6 +47,21 @@ impl<'b> RayColumns<'b> {
         self.dx.push(ray.dir.x);
         self.dy.push(ray.dir.y);
         self.dz.push(ray.dir.z);
+    }
+
+    /// [`RayColumns::push`] of the first `n` lanes of `origin` and `dir`, in lane order.
+    #[inline(always)]
+    fn push_lanes(&mut self, origin: &Vec3x8, dir: &Vec3x8, n: usize) {
+        for (column, v) in [
+            (&mut self.ox, origin.x),
+            (&mut self.oy, origin.y),
+            (&mut self.oz, origin.z),
+            (&mut self.dx, dir.x),
+            (&mut self.dy, dir.y),
+            (&mut self.dz, dir.z),
+        ] {
+            column.extend_from_slice_copy(&lanes(v)[..n]);
+        }
     }
 
     /// The number of rays.
@@ -151,6 +166,20 @@ impl<'b> RayQueue<'b> {
     /// Queues the camera ray of `pixel`: full weight, no parent.
     pub fn push_camera(&mut self, ray: &Ray, pixel: u32) {
         self.push(ray, pixel, Vec3::ONE, 1.0, SegmentKind::Eye, NO_NODE);
+    }
+
+    /// Queues the camera rays of the first `pixels.len()` lanes (at most 8) of `origin` and
+    /// `dir`, lane `i`'s pixel being `pixels[i]`: as [`RayQueue::push_camera`] lane by lane.
+    pub fn push_camera_packet(&mut self, origin: &Vec3x8, dir: &Vec3x8, pixels: &[u32]) {
+        let n = pixels.len();
+        self.rays.push_lanes(origin, dir, n);
+        self.pixel.extend_from_slice_copy(pixels);
+        self.throughput
+            .extend_from_slice_copy(&[Vec3::ONE; LANES][..n]);
+        self.weight.extend_from_slice_copy(&[1.0; LANES][..n]);
+        self.kind
+            .extend_from_slice_copy(&[SegmentKind::Eye; LANES][..n]);
+        self.parent.extend_from_slice_copy(&[NO_NODE; LANES][..n]);
     }
 
     /// Queues a mirror ray.
@@ -342,6 +371,43 @@ mod tests {
                 }
             }
             assert_eq!(seen, (0..n).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn a_packet_of_camera_rays_queues_as_its_lanes_one_by_one() {
+        let arena = Bump::new();
+        let lane = |i: usize| {
+            let f = i as f32;
+            Ray::new(Vec3::new(f, -f, 0.5 * f), Vec3::new(1.0, f, -2.0 * f))
+        };
+        let (origin, dir) = (
+            Vec3x8::from_lanes(std::array::from_fn(|i| lane(i).origin)),
+            Vec3x8::from_lanes(std::array::from_fn(|i| lane(i).dir)),
+        );
+        for n in 0..=LANES {
+            // after a ray already queued, so the lanes land behind it
+            let (mut packed, mut single) = (
+                RayQueue::with_capacity_in(1, &arena),
+                RayQueue::with_capacity_in(1, &arena),
+            );
+            let first = Ray::new(Vec3::splat(9.0), Vec3::Z);
+            packed.push_reflected(&first, 99, Vec3::splat(0.5), 0.5, 3);
+            single.push_reflected(&first, 99, Vec3::splat(0.5), 0.5, 3);
+            let pixels: Vec<u32> = (0..n as u32).map(|i| 10 + i).collect();
+            packed.push_camera_packet(&origin, &dir, &pixels);
+            for (i, &p) in pixels.iter().enumerate() {
+                single.push_camera(&lane(i), p);
+            }
+            assert_eq!(packed.len(), 1 + n);
+            for i in 0..packed.len() {
+                assert_eq!(packed.ray(i), single.ray(i), "{n} lanes, ray {i}");
+            }
+            assert_eq!(packed.pixel.as_slice(), single.pixel.as_slice());
+            assert_eq!(packed.throughput.as_slice(), single.throughput.as_slice());
+            assert_eq!(packed.weight.as_slice(), single.weight.as_slice());
+            assert_eq!(packed.kind.as_slice(), single.kind.as_slice());
+            assert_eq!(packed.parent.as_slice(), single.parent.as_slice());
         }
     }
 }

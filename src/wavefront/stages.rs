@@ -38,6 +38,8 @@ pub fn generate_sample_rays(
 ) {
     let tiles_x = samples.width.div_ceil(4);
     let spp = samples.spp as usize;
+    // Eight samples at a time become rays as one packet (the same bits as one by one).
+    let mut lanes = CameraLanes::default();
     for tile in run.first_tile..run.end_tile {
         let (tx, ty) = ((tile % tiles_x) * 4, (tile / tiles_x) * 2);
         for ly in 0..2 {
@@ -49,17 +51,45 @@ pub fn generate_sample_rays(
                 let first = (y * samples.width + x) as usize * spp;
                 for slot in first..first + spp {
                     let offset = samples.offsets.get(slot).copied();
-                    let point = Camera::sample_screen(
-                        samples.x0 + x,
-                        samples.y0 + y,
-                        offset.unwrap_or(Vec2::splat(0.5)),
-                        samples.image_width,
-                        samples.image_height,
-                    );
-                    queue.push_camera(&camera.generate_ray(point), slot as u32);
+                    let n = lanes.count;
+                    lanes.x[n] = samples.x0 + x;
+                    lanes.y[n] = samples.y0 + y;
+                    lanes.offset[n] = offset.unwrap_or(Vec2::splat(0.5));
+                    lanes.slot[n] = slot as u32;
+                    lanes.count += 1;
+                    if lanes.count == LANES {
+                        lanes.queue(camera, samples, queue);
+                    }
                 }
             }
         }
+    }
+    lanes.queue(camera, samples, queue);
+}
+
+/// Camera samples gathered for one packet: lane `i`'s pixel `(x[i], y[i])` in the image, its
+/// offset in the pixel and its slot; the first `count` lanes are filled.
+#[derive(Default)]
+struct CameraLanes {
+    x: [u32; LANES],
+    y: [u32; LANES],
+    offset: [Vec2; LANES],
+    slot: [u32; LANES],
+    count: usize,
+}
+
+impl CameraLanes {
+    /// Queues the filled lanes' camera rays and empties the lanes.
+    #[inline]
+    fn queue(&mut self, camera: &Camera, samples: &CameraSamples<'_>, queue: &mut RayQueue<'_>) {
+        if self.count == 0 {
+            return;
+        }
+        let (w, h) = (samples.image_width, samples.image_height);
+        let (sx, sy) = Camera::sample_screen_packet(self.x, self.y, self.offset, w, h);
+        let (origin, dir) = camera.generate_ray_packet(sx, sy);
+        queue.push_camera_packet(&origin, &dir, &self.slot[..self.count]);
+        self.count = 0;
     }
 }
 
