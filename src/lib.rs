@@ -123,6 +123,8 @@ pub mod shade;
 #[doc(hidden)]
 pub mod simd;
 pub mod stats;
+#[cfg(test)]
+mod test_rng;
 #[doc(hidden)]
 pub mod wavefront;
 #[doc(hidden)]

@@ -270,6 +270,7 @@ pub fn scatter(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_rng::Rng;
 
     fn mat() -> Phong {
         Phong {
@@ -322,16 +323,10 @@ mod tests {
 
     #[test]
     fn black_specular_gives_the_bits_powf_gives() {
-        let mut state = 0x2545_f491_u32;
-        let mut unit = |lo: f32, hi: f32| {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            lo + (hi - lo) * (state >> 8) as f32 / (1u32 << 24) as f32
-        };
+        let mut rng = Rng(0x2545_f491);
         let mut cases = Vec::new();
         for _ in 0..4000 {
-            let mut v = || Vec3::new(unit(-1.0, 1.0), unit(-1.0, 1.0), unit(-1.0, 1.0));
+            let mut v = || rng.vec(-1.0, 1.0);
             let (n, l, view) = (v().normalize(), v().normalize(), v().normalize());
             cases.push((n, l, view, v()));
         }

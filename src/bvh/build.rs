@@ -938,7 +938,7 @@ mod tests {
             })
             .collect();
         if shuffled {
-            let mut rng = super::super::test_rng::Rng(0x9e37_79b9);
+            let mut rng = crate::test_rng::Rng(0x9e37_79b9);
             for i in (1..n).rev() {
                 let j = (rng.range(0.0, 1.0) * (i + 1) as f32) as usize;
                 refs.swap(i, j.min(i));
@@ -1119,7 +1119,7 @@ mod tests {
     #[test]
     fn the_tree_is_the_same_on_one_thread_and_on_two() {
         for (n, shuffled) in [(20_000, false), (20_000, true), (70_000, true)] {
-            let mut rng = super::super::test_rng::Rng(0x2545_f491);
+            let mut rng = crate::test_rng::Rng(0x2545_f491);
             let boxes: Vec<Aabb> = line_of_refs(n, shuffled)
                 .iter()
                 .map(|r| {
@@ -1180,7 +1180,7 @@ mod tests {
     fn validate_rejects_each_broken_invariant() {
         use super::super::{HI, LO};
         use crate::simd::F32x8;
-        let mut rng = super::super::test_rng::Rng(0x51ed_270b);
+        let mut rng = crate::test_rng::Rng(0x51ed_270b);
         let boxes: Vec<Aabb> = (0..300)
             .map(|_| {
                 let c: [f32; 3] = std::array::from_fn(|_| rng.range64(-10.0, 10.0) as f32);

@@ -31,9 +31,6 @@ mod single;
 mod stack;
 mod stream;
 
-#[cfg(test)]
-mod test_rng;
-
 pub use lists::ListScratch;
 pub use packet::PACKET_STACK_DEPTH;
 pub use single::{Entered, Ray1x8};
@@ -643,8 +640,8 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::{Aabb, Bvh8, Node8, NodeRef, ROBUST, widen, widen8};
-    use crate::bvh::test_rng::Rng;
     use crate::simd::{F32x8, lanes};
+    use crate::test_rng::Rng;
 
     /// The 8-lane widening (two products and a max) gives the scalar one's value (a sum) for
     /// every sign and scale of distance down to 1e-30 (below, the scalar's scaled term is no

@@ -529,11 +529,11 @@ impl Bvh8 {
 #[cfg(test)]
 mod tests {
     use super::{Frustum, Packet8};
-    use crate::bvh::test_rng::Rng;
     use crate::bvh::{Aabb, Node8, NodeRef};
     use crate::math::{Ray, Vec3};
     use crate::packet::RayPacket;
     use crate::simd::{LANES, bitmask, lanes, mask_first};
+    use crate::test_rng::Rng;
 
     /// For rays sharing an octant, the octant test gives the general slab test's bits (mask
     /// and entry distances) for every child and every count of active lanes, directions

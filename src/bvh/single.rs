@@ -723,11 +723,11 @@ fn sort_keys_descending(k: &mut [u64]) {
 mod tests {
     use super::{PlaneBases, Ray1, Ray1x8};
     use crate::bvh::build::{BuildSettings, LeafSink, build};
-    use crate::bvh::test_rng::Rng;
     use crate::bvh::{Aabb, Node8, NodeRef, WIDTH};
     use crate::math::{Ray, Vec3};
     use crate::packet::RayPacket;
     use crate::simd::F32x8;
+    use crate::test_rng::Rng;
 
     /// Every field of a prepared ray as bits (planes as their indices).
     fn bits(r: &Ray1) -> Vec<u32> {

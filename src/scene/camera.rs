@@ -161,6 +161,7 @@ impl Camera {
 mod tests {
     use super::*;
     use crate::simd::lanes;
+    use crate::test_rng::Rng;
 
     #[test]
     fn up_is_orthogonalised() {
@@ -222,38 +223,26 @@ mod tests {
 
     #[test]
     fn packet_rays_are_the_scalar_rays_bit_for_bit() {
-        let mut state = 0x9e37_79b9_u32;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state
-        };
+        let mut rng = Rng(0x9e37_79b9);
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         for c in 0..200 {
-            let mut unit = || (next() >> 8) as f32 / (1u32 << 24) as f32;
             let kind = if c % 2 == 0 {
                 Projection::Perspective {
-                    angle: 0.1 + 2.5 * unit(),
+                    angle: 0.1 + 2.5 * rng.range(0.0, 1.0),
                 }
             } else {
                 Projection::Orthographic {
-                    size: 0.5 + 20.0 * unit(),
+                    size: 0.5 + 20.0 * rng.range(0.0, 1.0),
                 }
             };
-            let v = |unit: &mut dyn FnMut() -> f32| {
-                Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5) * 10.0
-            };
-            let (center, direction) = (v(&mut unit), v(&mut unit));
-            let up = direction.cross(v(&mut unit));
+            let (center, direction) = (rng.vec(-5.0, 5.0), rng.vec(-5.0, 5.0));
+            let up = direction.cross(rng.vec(-5.0, 5.0));
             let camera = Camera::new(kind, center, direction, up);
-            let (width, height) = (1 + next() % 2000, 1 + next() % 2000);
-            let x: [u32; LANES] = std::array::from_fn(|_| next() % width);
-            let y: [u32; LANES] = std::array::from_fn(|_| next() % height);
-            let offset: [Vec2; LANES] = std::array::from_fn(|_| {
-                let mut unit = || (next() >> 8) as f32 / (1u32 << 24) as f32;
-                Vec2::new(unit(), unit())
-            });
+            let (width, height) = (1 + rng.next() % 2000, 1 + rng.next() % 2000);
+            let x: [u32; LANES] = std::array::from_fn(|_| rng.next() % width);
+            let y: [u32; LANES] = std::array::from_fn(|_| rng.next() % height);
+            let offset: [Vec2; LANES] =
+                std::array::from_fn(|_| Vec2::new(rng.range(0.0, 1.0), rng.range(0.0, 1.0)));
             let (sx, sy) = Camera::sample_screen_packet(x, y, offset, width, height);
             let (origin, dir) = camera.generate_ray_packet(sx, sy);
             for i in 0..LANES {

@@ -1,9 +1,10 @@
-//! The traversal unit tests' random numbers: a small deterministic generator (xorshift), so
-//! the packet and single-ray tests draw their rays and boxes the same way. Test-only.
+//! The unit tests' random numbers: a small deterministic generator (xorshift), so the packet
+//! and single-ray tests draw their rays and boxes the same way, and the shading and camera
+//! tests their random inputs. Test-only, a leaf.
 
 use crate::math::Vec3;
 
-pub(super) struct Rng(pub u32);
+pub(crate) struct Rng(pub u32);
 
 impl Rng {
     /// 32 random bits.
