@@ -285,6 +285,17 @@ pub fn filter_rows(
     let r = filter.support_radius();
     let (nw, spp) = (cols.len(), samples.spp as usize);
     debug_assert_eq!(out.len(), nw * rows.len());
+    if r == 0 && spp == 1 {
+        // Each pixel is its one sample: the same bits as the sums below, without them.
+        for (y, row) in rows.clone().zip(out.chunks_exact_mut(nw)) {
+            let (colors, offsets) = samples.rows[(y - samples.y0) as usize];
+            let first = (cols.start - samples.x0) as usize;
+            for ((o, c), s) in row.iter_mut().zip(&colors[first..]).zip(&offsets[first..]) {
+                *o = one_sample(filter, c, s);
+            }
+        }
+        return;
+    }
     if r == 0 {
         // Each pixel is made of its own samples alone: the same sums, without the scatter.
         for (y, row) in rows.clone().zip(out.chunks_exact_mut(nw)) {
@@ -350,6 +361,15 @@ pub fn filter_rows(
     for (o, a) in out.iter_mut().zip(&acc) {
         *o = normalised(a);
     }
+}
+
+/// A pixel made of one sample at offset `o` alone: the sample's colour `c`, or black where the
+/// filter gives it no weight. The same bits as [`normalised`] of its one weighted sum: `w * c`
+/// is exact in `f64` (two 24-bit significands), so dividing it by `w` gives `c` back exactly.
+#[inline]
+fn one_sample(filter: &Filter, c: &Vec3, o: &Vec2) -> Vec3 {
+    let w = filter.combine(filter.axis(o.x - 0.5), filter.axis(o.y - 0.5));
+    if w > 0.0 { *c } else { Vec3::ZERO }
 }
 
 /// Adds a sample of colour `c` and weight `w` to the sums `a` (colour, then weight).
