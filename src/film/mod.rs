@@ -289,8 +289,12 @@ pub fn filter_rows(
         // Each pixel is its one sample: the same bits as the sums below, without them.
         for (y, row) in rows.clone().zip(out.chunks_exact_mut(nw)) {
             let (colors, offsets) = samples.rows[(y - samples.y0) as usize];
-            let first = (cols.start - samples.x0) as usize;
-            for ((o, c), s) in row.iter_mut().zip(&colors[first..]).zip(&offsets[first..]) {
+            let pixels = (cols.start - samples.x0) as usize..(cols.end - samples.x0) as usize;
+            for ((o, c), s) in row
+                .iter_mut()
+                .zip(&colors[pixels.clone()])
+                .zip(&offsets[pixels])
+            {
                 *o = one_sample(filter, c, s);
             }
         }
