@@ -311,7 +311,7 @@ pub fn filter_rows(
                     .iter()
                     .zip(&offsets[first..first + spp])
                 {
-                    let w = filter.combine(filter.axis(o.x - 0.5), filter.axis(o.y - 0.5)) as f64;
+                    let w = filter.weight(o.x - 0.5, o.y - 0.5) as f64;
                     accumulate(&mut a, w, c);
                 }
                 *o = normalised(&a);
@@ -372,7 +372,7 @@ pub fn filter_rows(
 /// is exact in `f64` (two 24-bit significands), so dividing it by `w` gives `c` back exactly.
 #[inline]
 fn one_sample(filter: &Filter, c: &Vec3, o: &Vec2) -> Vec3 {
-    let w = filter.combine(filter.axis(o.x - 0.5), filter.axis(o.y - 0.5));
+    let w = filter.weight(o.x - 0.5, o.y - 0.5);
     if w > 0.0 { *c } else { Vec3::ZERO }
 }
 
