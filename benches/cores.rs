@@ -1,10 +1,11 @@
 //! Whether the machine's first two CPUs are two cores right now. A loop of multiply-adds that
 //! fills one core's floating-point units (eight independent chains of 8-lane multiply-adds)
 //! runs on the first CPU alone, on the second alone, then on both at once, round after round,
-//! on the render's own pinned workers ([`whitted::render::worker_pool`]). On two cores each of
-//! a pair runs as fast as one alone; on the two hardware threads of one core (where a host may
-//! place a virtual machine's two vCPUs) each runs at about half, and a 2-thread frame can scale
-//! no better. PERF.md, sitting 51, reads the 2-thread ceiling of its machine with it.
+//! on the render's own workers ([`whitted::render::worker_pool`], which pins them one to a CPU
+//! when they take every CPU: unless `RAYON_NUM_THREADS` says otherwise). On two cores each of a
+//! pair runs as fast as one alone; on the two hardware threads of one core (where a host may
+//! place a virtual machine's two vCPUs) each runs at about half, and a 2-thread frame then falls
+//! far short of 2x. PERF.md, sitting 51, reads the 2-thread ceiling of its machine with it.
 //!
 //! ```text
 //! cargo bench --bench cores [-- ROUNDS]      # 40 rounds by default, about half a second each
