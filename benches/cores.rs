@@ -4,8 +4,9 @@
 //! on the render's own workers ([`whitted::render::worker_pool`], which pins them one to a CPU
 //! when they take every CPU: unless `RAYON_NUM_THREADS` says otherwise). On two cores each of a
 //! pair runs as fast as one alone; on the two hardware threads of one core (where a host may
-//! place a virtual machine's two vCPUs) each runs at about half, and a 2-thread frame then falls
-//! far short of 2x. PERF.md, sitting 51, reads the 2-thread ceiling of its machine with it.
+//! place a virtual machine's two vCPUs) each runs at about half: arithmetic on both CPUs gains
+//! nothing while that lasts. PERF.md, sitting 51, measured its machine with it (and found that how
+//! often it happened did not predict a run of whole frames).
 //!
 //! ```text
 //! cargo bench --bench cores [-- ROUNDS]      # 40 rounds by default, about half a second each
