@@ -5,8 +5,11 @@
 //! [`Progress`] hook, and the limits with the flags that lift them. A leaf shared by the command
 //! line, `render.rs`, both tracers' frame loops and the tile merge.
 
+use std::ops::Range;
+
 use crate::error::{Error, Result};
 use crate::filter::Filter;
+use crate::math::Vec3;
 use crate::sampler::Sampler;
 use crate::shade::ShadeOptions;
 
@@ -218,9 +221,41 @@ impl RenderOptions {
     }
 }
 
-/// Told how many image rows a render has just finished; called from worker threads, so it
-/// must be cheap and thread-safe (the CLI's progress bar; `&|_| {}` for none).
-pub type Progress<'a> = &'a (dyn Fn(u32) + Sync);
+/// Told which image rows a render has just finished; called from worker threads, so it must
+/// be thread-safe and should be cheap (the CLI's progress bar, and its images written while the
+/// render runs; `&|_| {}` for none).
+pub type Progress<'a> = &'a (dyn Fn(&FinishedRows<'_>) + Sync);
+
+/// Rows a render has just finished, as its [`Progress`] hook is told.
+pub struct FinishedRows<'a> {
+    /// How many rows.
+    pub count: u32,
+    /// Their final pixels, where the frame loop has them (the film both tracers stream through
+    /// does; the grid picture and the heatmap count rows only).
+    pub pixels: Option<RowPixels<'a>>,
+}
+
+impl FinishedRows<'_> {
+    /// `count` rows, without their pixels.
+    pub fn counted(count: u32) -> FinishedRows<'static> {
+        FinishedRows {
+            count,
+            pixels: None,
+        }
+    }
+}
+
+/// The final pixels of whole rows of a frame, as the frame will hold them: rows `rows` of its
+/// window (0 is the window's top row), each as wide as the window, rows top to bottom.
+pub struct RowPixels<'a> {
+    pub rows: Range<u32>,
+    /// Linear RGB per pixel.
+    pub color: &'a [Vec3],
+    /// Empty unless the render keeps depth and normals ([`RenderOptions::depth_normal`]).
+    pub depth: &'a [f32],
+    /// Empty like `depth`.
+    pub normal: &'a [Vec3],
+}
 
 /// Checks the options against the limits before anything is allocated.
 pub fn check_options(opts: &RenderOptions) -> Result<()> {

@@ -4,7 +4,7 @@
 //! nothing.
 //!
 //! ```text
-//! render_with_progress(.., &|rows| bar.rows_done(rows)) --> indicatif bar on stderr (tty only)
+//! render_with_progress(.., &|rows| bar.rows_done(rows.count)) --> indicatif bar on stderr (tty only)
 //! ```
 
 use std::io::IsTerminal;

@@ -20,7 +20,7 @@ use crate::grid::Grid;
 use crate::grid::picture::{self, GridView};
 use crate::intersect::{Hit, intersect_plane, intersect_sphere, intersect_triangle};
 use crate::math::{Ray, Vec3, barycentrics, saturate, transform_normal};
-use crate::options::{Progress, RenderOptions, stack_size};
+use crate::options::{FinishedRows, Progress, RenderOptions, stack_size};
 use crate::raytree::{RayTree, SegmentId, SegmentKind};
 use crate::scene::normals::interpolate;
 use crate::scene::{Camera, Object, Phong, Scene};
@@ -260,7 +260,7 @@ pub fn render_grid_reference(
                     normal[i] = n;
                 }
             }
-            progress(1);
+            progress(&FinishedRows::counted(1));
         });
     frame
         .rays

@@ -150,6 +150,9 @@ pub struct StatsReport {
     pub rays: RayCounts,
     /// Named phases and their durations, in order (parse, render, write, ...).
     pub phases: Vec<(&'static str, Duration)>,
+    /// Images written while the render ran (TGA and PPM, `output::StreamedImage`): their
+    /// conversion and writing is then part of the render phase, not of the write phase.
+    pub streamed_images: usize,
     /// Peak resident memory, if known.
     pub peak_kib: Option<u64>,
     /// Packet tracer: geometry and BVH build.
@@ -220,6 +223,13 @@ impl StatsReport {
             phases.join(" | "),
             ms(total)
         );
+        if self.streamed_images > 0 {
+            let _ = writeln!(
+                s,
+                "  images   {} written while rendering",
+                self.streamed_images
+            );
+        }
         let _ = writeln!(
             s,
             "  rays     {} in the render, {:.2} Mrays/s",
@@ -314,6 +324,7 @@ impl StatsReport {
         for (name, d) in &self.phases {
             let _ = write!(s, " {name}_ms={:.3}", ms(*d));
         }
+        let _ = write!(s, " streamed_images={}", self.streamed_images);
         let _ = write!(s, " rays={}", self.rays.total());
         for k in SegmentKind::ALL {
             let _ = write!(s, " {}_rays={}", k.name(), self.rays.of(k));

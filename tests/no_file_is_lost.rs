@@ -1,7 +1,7 @@
 //! Claim: a run never costs a file. An output path that cannot be written fails before the
 //! scene is even read (exit 2, nothing left behind); a run that fails for any reason, or is
-//! killed while rendering, leaves an existing image byte-identical; and no temporary file is
-//! ever left in the output folder.
+//! killed while rendering, leaves an existing image byte-identical, even an image being written
+//! while the render runs (TGA, PPM); and no temporary file is ever left in the output folder.
 //!
 //! What belongs here: what happens to output files, through the real binary. Bad scene files
 //! as such belong in `bad_input.rs`.
@@ -180,17 +180,29 @@ fn a_good_render_replaces_the_image_and_leaves_no_temporary_file() {
 }
 
 #[test]
-fn a_killed_render_leaves_the_previous_image_byte_identical() {
-    let dir = folder("killed");
+fn a_good_render_written_while_rendering_replaces_the_image_and_leaves_no_temporary_file() {
+    let dir = folder("good_tga");
+    std::fs::write(dir.join("out.tga"), PREVIOUS).unwrap();
     let before = listing(&dir);
-    // A render of many seconds (16 megapixels, shadows, mirror bounces), killed a moment after it
-    // started: the image is written only once it is complete, so nothing has been touched.
+    let run = whitted(
+        &dir,
+        &["render", "good.txt", "-o", "out.tga", "--size", "16", "8"],
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let img = common::read_tga(&dir.join("out.tga"));
+    assert_eq!((img.width, img.height), (16, 8));
+    assert_eq!(listing(&dir), before);
+}
+
+/// Starts a render of many seconds (16 megapixels, shadows, mirror bounces) into `out` and kills
+/// it a moment later.
+fn kill_a_render(dir: &Path, out: &str) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_whitted"))
         .args([
             "render",
             "good.txt",
             "-o",
-            "out.png",
+            out,
             "--size",
             "4000",
             "4000",
@@ -198,12 +210,32 @@ fn a_killed_render_leaves_the_previous_image_byte_identical() {
             "--bounces",
             "20",
         ])
-        .current_dir(&dir)
+        .current_dir(dir)
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(300));
     child.kill().unwrap();
     child.wait().unwrap();
+}
+
+#[test]
+fn a_killed_render_leaves_the_previous_image_byte_identical() {
+    let dir = folder("killed");
+    let before = listing(&dir);
+    // The image is written only once it is complete, so nothing has been touched.
+    kill_a_render(&dir, "out.png");
     assert_previous_intact(&dir);
+    assert_eq!(listing(&dir), before);
+}
+
+#[test]
+fn a_killed_render_of_an_image_written_while_rendering_leaves_no_file_behind() {
+    let dir = folder("killed_tga");
+    std::fs::write(dir.join("out.tga"), PREVIOUS).unwrap();
+    let before = listing(&dir);
+    // A TGA is written band by band as the render runs, into a file that has no name until
+    // the image is complete: killing the run loses that file and nothing else.
+    kill_a_render(&dir, "out.tga");
+    assert_eq!(std::fs::read(dir.join("out.tga")).unwrap(), PREVIOUS);
     assert_eq!(listing(&dir), before);
 }

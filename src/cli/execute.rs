@@ -10,7 +10,7 @@ use super::render_options::Command;
 use crate::error::{Error, Result};
 use crate::heatmap;
 use crate::options::{self, RenderOptions};
-use crate::output::{self, ImageKind, piece::RenderFingerprint};
+use crate::output::{self, Content, ImageKind, StreamedImage, piece::RenderFingerprint};
 use crate::progress::RowBar;
 use crate::raytree::TreeSource;
 use crate::render;
@@ -83,36 +83,62 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     }
     let mut rays = RayCounts::default();
     let (mut accel, mut bounce_time, mut grid) = (None, Vec::new(), None);
+    let mut streamed_images = 0;
     let mut files = Vec::new();
     if let Some((file, zoom)) = &sampling.render_filter {
         // The filter's picture depends on the filter and the image size alone: nothing to trace.
         let picture = sample_images::render_filter(w, h, *zoom, &cmd.render.filter);
         files.push((
             file.clone(),
-            pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
+            Content::Bytes(
+                pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
+            ),
         ));
     }
     if traced {
         let t1 = Instant::now();
-        let bar = RowBar::new("render", win.height());
-        let frame = render::render_on(&pool, &scene, &cmd.render, &|rows| bar.rows_done(rows))?;
-        bar.finish();
-        phases.push(("render", t1.elapsed()));
-        let t2 = Instant::now();
-        // Every image is encoded before any is written: a failed run leaves none.
-        let images = [
+        let images: Vec<(ImageKind, &PathBuf)> = [
             cmd.output.as_ref().map(|p| (ImageKind::Color, p)),
             cmd.depth.as_ref().map(|(near, far, p)| {
                 let (near, far) = (*near, *far);
                 (ImageKind::Depth { near, far }, p)
             }),
             cmd.normals.as_ref().map(|p| (ImageKind::Normals, p)),
-        ];
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        // TGA and PPM images are written as the render finishes their rows (the options name
+        // a different file for each image).
+        let mut streams: Vec<Option<StreamedImage>> = images
+            .iter()
+            .map(|&(kind, path)| StreamedImage::create(path, kind, win.width(), win.height()))
+            .collect();
+        let bar = RowBar::new("render", win.height());
+        let frame = render::render_on(&pool, &scene, &cmd.render, &|rows| {
+            bar.rows_done(rows.count);
+            if let Some(px) = &rows.pixels {
+                for stream in streams.iter().flatten() {
+                    stream.rows(px);
+                }
+            }
+        })?;
+        bar.finish();
+        phases.push(("render", t1.elapsed()));
+        let t2 = Instant::now();
+        streamed_images = streams.iter().flatten().filter(|s| s.complete()).count();
+        // Every image is encoded before any is written: a failed run leaves none.
         files.extend(pool.install(|| {
             let print = RenderFingerprint::new(&scene, &cmd.render);
             let mut files = Vec::new();
-            for (kind, path) in images.into_iter().flatten() {
-                files.extend(output::frame_files(&frame, kind, path, &print)?);
+            for ((kind, path), stream) in images.iter().zip(&mut streams) {
+                files.extend(output::frame_files(
+                    &frame,
+                    *kind,
+                    path,
+                    &print,
+                    stream.take(),
+                )?);
             }
             Ok::<_, Error>(files)
         })?);
@@ -120,7 +146,9 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             let picture = sample_images::render_samples(&frame, &cmd.render.sampler, *zoom);
             files.push((
                 file.clone(),
-                pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
+                Content::Bytes(
+                    pool.install(|| output::encode(&picture, output::Format::for_path(file)?))?,
+                ),
             ));
         }
         output::write_files(&files)?;
@@ -158,6 +186,7 @@ fn execute_quietly(cmd: Command) -> Result<()> {
             },
             rays,
             phases,
+            streamed_images,
             peak_kib: peak_memory_kib(),
             accel,
             bounce_time,
@@ -178,7 +207,7 @@ fn write_heatmap(cmd: &Command, scene: &Scene, out: &Path) -> Result<()> {
         ..cmd.render.clone()
     };
     let bar = RowBar::new("heatmap", opts.height);
-    let costs = render::eye_ray_costs(scene, &opts, &|rows| bar.rows_done(rows))?;
+    let costs = render::eye_ray_costs(scene, &opts, &|rows| bar.rows_done(rows.count))?;
     bar.finish();
     output::write_image(&heatmap::draw_heatmap(&costs), out)?;
     let ((x, y), max) = costs.max();
@@ -224,8 +253,9 @@ fn write_ray_tree(cmd: &Command, scene: &Scene, x: u32, y: u32, json: &Path) -> 
         keep_samples: false,
         ..opts.clone()
     };
-    let frame =
-        render::render_with_progress(&witness_scene, &witness_opts, &|rows| bar.rows_done(rows))?;
+    let frame = render::render_with_progress(&witness_scene, &witness_opts, &|rows| {
+        bar.rows_done(rows.count)
+    })?;
     bar.finish();
     let title = format!("ray tree of pixel ({x}, {y})");
     let picture = witness::draw_ray_tree(

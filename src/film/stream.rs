@@ -7,8 +7,12 @@
 //!
 //! ```text
 //! worker: k = next band --trace--> samples k --> output bands m whose bands lo(m)..=hi(m) are all in:
-//!         filter m --> its rows of the output; free the bands no unfiltered output band needs
+//!         filter m --> its rows of the output --> progress(those rows, final pixels and all);
+//!         free the bands no unfiltered output band needs
 //! ```
+//!
+//! The progress hook sees each row once, with the pixels the frame will hold: the command line
+//! writes TGA and PPM images from them while the render runs (`output::StreamedImage`).
 //!
 //! The bytes do not depend on the thread count or on which thread did what: a band's samples
 //! are a function of the band, and an output pixel a function of the samples (one fixed
@@ -23,7 +27,7 @@ use super::{FilmSpec, SampleBlock, SampleRows, filter_rows};
 use crate::error::Result;
 use crate::fill::filled;
 use crate::math::Vec3;
-use crate::options::{Progress, Window};
+use crate::options::{FinishedRows, Progress, RowPixels, Window};
 
 /// Rows per band of samples: the unit of parallel work and of streaming.
 pub const BAND_ROWS: u32 = 8;
@@ -199,7 +203,17 @@ where
             };
             for (m, bands, mut rows) in ready {
                 filter_band(&plan, m, &bands, &mut rows);
-                progress(plan.output_rows(m).len() as u32);
+                let out_rows = plan.output_rows(m);
+                let y0 = spec.window.y0;
+                progress(&FinishedRows {
+                    count: out_rows.len() as u32,
+                    pixels: Some(RowPixels {
+                        rows: out_rows.start - y0..out_rows.end - y0,
+                        color: rows.color,
+                        depth: rows.depth,
+                        normal: rows.normal,
+                    }),
+                });
                 let mut sh = shared.lock().unwrap_or_else(PoisonError::into_inner);
                 sh.filtered[(m - plan.out_first) as usize] = true;
                 release(&plan, &mut sh, plan.needs(m));

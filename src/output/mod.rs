@@ -3,7 +3,9 @@
 //! HDR: `float.rs`), and a render's pieces ([`piece`]: the place of a cropped image in the full
 //! one, and the fingerprint of the render it belongs to). Every file is written to a temporary
 //! file in the target folder and renamed into place, so a failed write never leaves a
-//! half-written image and an existing file stays intact until the new one is complete.
+//! half-written image and an existing file stays intact until the new one is complete. A TGA
+//! or PPM image may instead be written while the render runs ([`StreamedImage`]), into an
+//! unnamed file that gets the temporary name, then the real one, the same way.
 //!
 //! ```text
 //! Frame --frame_raster(kind, format)--> Raster (the samples a file stores) --encode--> bytes
@@ -20,9 +22,10 @@
 mod float;
 pub mod piece;
 mod rgb8;
+mod streamed;
 
 use std::fs;
-use std::io::Write;
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
@@ -30,6 +33,7 @@ use crate::frame::Frame;
 use crate::options::Window;
 pub use float::{FINGERPRINT_ATTRIBUTE, from_rgbe, to_rgbe};
 pub use rgb8::{Rgb8, color_image, depth_image, normal_image, read_png, to_byte};
+pub use streamed::StreamedImage;
 
 /// The image formats we write, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -291,31 +295,68 @@ pub fn decode(bytes: &[u8], format: Format) -> std::result::Result<Decoded, Stri
     }
 }
 
-/// A file to write: its path and bytes.
-pub type FileBytes = (PathBuf, Vec<u8>);
+/// A file to write: its path and what it holds.
+pub type FileBytes = (PathBuf, Content);
+
+/// What a file to write holds.
+pub enum Content {
+    /// Bytes to write.
+    Bytes(Vec<u8>),
+    /// An unnamed file already written whole ([`StreamedImage`]).
+    Written(fs::File),
+}
+
+impl Content {
+    fn source(&self) -> Source<'_> {
+        match self {
+            Content::Bytes(b) => Source::Bytes(b),
+            Content::Written(f) => Source::Written(f),
+        }
+    }
+}
+
+/// What [`write_atomic_files`] puts in a file: bytes, or an unnamed file already written.
+#[derive(Clone, Copy)]
+pub(crate) enum Source<'a> {
+    Bytes(&'a [u8]),
+    Written(&'a fs::File),
+}
 
 /// The files that hold the `kind` image of `frame` at `path`, in the format its extension
 /// names: the image, preceded by its sidecar ([`piece`]) when the frame is a piece of a larger
 /// image in a format that cannot record its place itself. An EXR records its place and
 /// fingerprint in itself. The fingerprint is hashed only for a file that records it.
+/// `streamed`, the image written during the render, stands for the image when it holds every
+/// row ([`StreamedImage::into_file`]); otherwise the image is encoded from the frame.
 pub fn frame_files(
     frame: &Frame,
     kind: ImageKind,
     path: &Path,
     print: &piece::RenderFingerprint<'_>,
+    streamed: Option<StreamedImage>,
 ) -> Result<Vec<FileBytes>> {
     let format = Format::for_path(path)?;
     let place = Place::of(frame);
-    let raster = frame_raster(frame, kind, format);
     let sidecar = !format.records_its_place() && !place.is_whole();
     let fingerprint = (sidecar || format.records_its_place()).then(|| print.of(kind));
-    let bytes = encode_raster(&raster, format, &place, fingerprint.as_deref())?;
+    let content = match streamed.and_then(StreamedImage::into_file) {
+        Some(file) => Content::Written(file),
+        None => {
+            let raster = frame_raster(frame, kind, format);
+            Content::Bytes(encode_raster(
+                &raster,
+                format,
+                &place,
+                fingerprint.as_deref(),
+            )?)
+        }
+    };
     let mut files = Vec::with_capacity(2);
     if let (true, Some(fingerprint)) = (sidecar, fingerprint) {
         let text = piece::sidecar_text(&piece::Piece { fingerprint, place });
-        files.push((piece::sidecar_path(path), text.into_bytes()));
+        files.push((piece::sidecar_path(path), Content::Bytes(text.into_bytes())));
     }
-    files.push((path.to_path_buf(), bytes));
+    files.push((path.to_path_buf(), content));
     Ok(files)
 }
 
@@ -323,9 +364,9 @@ pub fn frame_files(
 /// none is left. An image written without a sidecar loses the stale sidecar an earlier piece of
 /// the same name left.
 pub fn write_files(files: &[FileBytes]) -> Result<()> {
-    let refs: Vec<(&Path, &[u8])> = files
+    let refs: Vec<(&Path, Source)> = files
         .iter()
-        .map(|(p, b)| (p.as_path(), b.as_slice()))
+        .map(|(p, c)| (p.as_path(), c.source()))
         .collect();
     write_atomic_files(&refs, "write image")?;
     for (path, _) in files {
@@ -345,7 +386,7 @@ pub fn write_frame(
     path: &Path,
     print: &piece::RenderFingerprint<'_>,
 ) -> Result<()> {
-    write_files(&frame_files(frame, kind, path, print)?)
+    write_files(&frame_files(frame, kind, path, print, None)?)
 }
 
 /// Checks, before a render starts, that `path` has a known extension, fits the format, and lies
@@ -423,23 +464,37 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// [`write_atomic`], naming the write `action` in errors ("write ray tree").
 pub fn write_atomic_as(path: &Path, bytes: &[u8], action: &'static str) -> Result<()> {
-    write_atomic_files(&[(path, bytes)], action)
+    write_atomic_files(&[(path, Source::Bytes(bytes))], action)
 }
 
 /// Writes several files atomically, in order: every temporary file is written and flushed
-/// first, then each is renamed into place, so the last file appears only once the others are
-/// complete. On failure every temporary file, and every file this call already renamed into
-/// place, is removed.
-pub(crate) fn write_atomic_files(files: &[(&Path, &[u8])], action: &'static str) -> Result<()> {
+/// first (a file already written is flushed and named), then each is renamed into place, so
+/// the last file appears only once the others are complete. On failure every temporary file,
+/// and every file this call already renamed into place, is removed.
+pub(crate) fn write_atomic_files(files: &[(&Path, Source)], action: &'static str) -> Result<()> {
     let temps: Vec<PathBuf> = files.iter().map(|(p, _)| temp_path(p)).collect();
     let mut renamed = 0;
     let result = files
         .iter()
         .zip(&temps)
-        .try_for_each(|((path, bytes), tmp)| {
-            let mut file = fs::File::create(tmp).map_err(|e| (*path, e))?;
-            file.write_all(bytes).map_err(|e| (*path, e))?;
-            file.sync_all().map_err(|e| (*path, e))
+        .try_for_each(|((path, content), tmp)| match content {
+            Source::Bytes(bytes) => {
+                let mut file = fs::File::create(tmp).map_err(|e| (*path, e))?;
+                file.write_all(bytes).map_err(|e| (*path, e))?;
+                file.sync_all().map_err(|e| (*path, e))
+            }
+            Source::Written(file) => {
+                file.sync_all().map_err(|e| (*path, e))?;
+                if streamed::link_unnamed(file, tmp).is_ok() {
+                    return Ok(());
+                }
+                // No link through /proc (a sandbox may hide it): the bytes are copied instead.
+                let mut named = fs::File::create(tmp).map_err(|e| (*path, e))?;
+                let mut from: &fs::File = file;
+                from.seek(SeekFrom::Start(0)).map_err(|e| (*path, e))?;
+                std::io::copy(&mut from, &mut named).map_err(|e| (*path, e))?;
+                named.sync_all().map_err(|e| (*path, e))
+            }
         });
     let result = result.and_then(|()| {
         files.iter().zip(&temps).try_for_each(|((path, _), tmp)| {

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
-use super::Format;
+use super::{Format, ImageKind};
 use crate::error::{Error, Result};
 use crate::fill::filled;
 use crate::frame::Frame;
@@ -35,35 +35,78 @@ const PIXELS_PER_TASK: usize = 1 << 14;
 /// Pixels converted together: 24 channels, three vectors of [`LANES`].
 const GROUP: usize = LANES;
 
-/// The 8-bit image of `f(pixel index)`, converted in parallel (a serial phase of every render
+/// The pixels an 8-bit image is made from: a whole frame's, or some of its rows'. Depth and
+/// normals may be empty when the image is the colour one.
+#[derive(Clone, Copy)]
+pub(super) struct Pixels<'a> {
+    pub color: &'a [Vec3],
+    pub depth: &'a [f32],
+    pub normal: &'a [Vec3],
+}
+
+impl Pixels<'_> {
+    fn of(frame: &Frame) -> Pixels<'_> {
+        Pixels {
+            color: &frame.color,
+            depth: &frame.depth,
+            normal: &frame.normal,
+        }
+    }
+}
+
+/// Writes the RGB bytes of pixels `first..first + out.len() / 3` of the `kind` image of `px`
+/// into `out`. Every conversion of a frame to 8 bits, whole or a few rows at a time, is this.
+pub(super) fn kind_to_bytes(kind: ImageKind, px: Pixels<'_>, first: usize, out: &mut [u8]) {
+    match kind {
+        ImageKind::Color => to_bytes(|i| px.color[i], first, out),
+        ImageKind::Depth { near, far } => to_bytes(
+            |i| {
+                let t = px.depth[i];
+                if t.is_finite() {
+                    Vec3::splat(((far - t) / (far - near)).clamp(0.0, 1.0))
+                } else {
+                    Vec3::ZERO
+                }
+            },
+            first,
+            out,
+        ),
+        ImageKind::Normals => to_bytes(|i| px.normal[i].abs(), first, out),
+    }
+}
+
+/// The RGB bytes of `f(first..)` into `bytes`: groups of [`GROUP`] pixels gathered, then
+/// converted [`LANES`] channels at a time; the last few one by one.
+fn to_bytes(f: impl Fn(usize) -> Vec3, first: usize, bytes: &mut [u8]) {
+    let done = first + bytes.len() / 3 / GROUP * GROUP;
+    let mut groups = bytes.chunks_exact_mut(3 * GROUP);
+    for (g, out) in (&mut groups).enumerate() {
+        let mut channels = [0.0f32; 3 * GROUP];
+        for (k, ch) in channels.chunks_exact_mut(3).enumerate() {
+            ch.copy_from_slice(&f(first + g * GROUP + k).to_array());
+        }
+        for (o, c) in out
+            .chunks_exact_mut(LANES)
+            .zip(channels.chunks_exact(LANES))
+        {
+            o.copy_from_slice(&unit_to_bytes(load_partial(c, 0.0)));
+        }
+    }
+    for (j, px) in groups.into_remainder().chunks_exact_mut(3).enumerate() {
+        let c = f(done + j);
+        px.copy_from_slice(&[to_byte(c.x), to_byte(c.y), to_byte(c.z)]);
+    }
+}
+
+/// The `kind` 8-bit image of `frame`, converted in parallel (a serial phase of every render
 /// otherwise: ~10 ms a megapixel).
-fn from_pixels(frame: &Frame, f: impl Fn(usize) -> Vec3 + Sync) -> Rgb8 {
+pub(super) fn frame_image(frame: &Frame, kind: ImageKind) -> Rgb8 {
     let n = frame.width as usize * frame.height as usize;
     let mut data = filled(n * 3, 0u8);
+    let px = Pixels::of(frame);
     data.par_chunks_mut(3 * PIXELS_PER_TASK)
         .enumerate()
-        .for_each(|(task, bytes)| {
-            let first = task * PIXELS_PER_TASK;
-            let done = first + bytes.len() / 3 / GROUP * GROUP;
-            // A group's 24 channels gathered, then converted 8 at a time
-            let mut groups = bytes.chunks_exact_mut(3 * GROUP);
-            for (g, out) in (&mut groups).enumerate() {
-                let mut channels = [0.0f32; 3 * GROUP];
-                for (k, ch) in channels.chunks_exact_mut(3).enumerate() {
-                    ch.copy_from_slice(&f(first + g * GROUP + k).to_array());
-                }
-                for (o, c) in out
-                    .chunks_exact_mut(LANES)
-                    .zip(channels.chunks_exact(LANES))
-                {
-                    o.copy_from_slice(&unit_to_bytes(load_partial(c, 0.0)));
-                }
-            }
-            for (j, px) in groups.into_remainder().chunks_exact_mut(3).enumerate() {
-                let c = f(done + j);
-                px.copy_from_slice(&[to_byte(c.x), to_byte(c.y), to_byte(c.z)]);
-            }
-        });
+        .for_each(|(task, bytes)| kind_to_bytes(kind, px, task * PIXELS_PER_TASK, bytes));
     Rgb8 {
         width: frame.width,
         height: frame.height,
@@ -73,75 +116,84 @@ fn from_pixels(frame: &Frame, f: impl Fn(usize) -> Vec3 + Sync) -> Rgb8 {
 
 /// The colour image.
 pub fn color_image(frame: &Frame) -> Rgb8 {
-    from_pixels(frame, |i| frame.color[i])
+    frame_image(frame, ImageKind::Color)
 }
 
 /// The depth image: grey `(far - t) / (far - near)` clamped to `[0, 1]`; black where nothing was
 /// hit.
 pub fn depth_image(frame: &Frame, near: f32, far: f32) -> Rgb8 {
-    from_pixels(frame, |i| {
-        let t = frame.depth[i];
-        if t.is_finite() {
-            Vec3::splat(((far - t) / (far - near)).clamp(0.0, 1.0))
-        } else {
-            Vec3::ZERO
-        }
-    })
+    frame_image(frame, ImageKind::Depth { near, far })
 }
 
 /// The normal image: `abs(normal)` as RGB, black where nothing was hit.
 pub fn normal_image(frame: &Frame) -> Rgb8 {
-    from_pixels(frame, |i| frame.normal[i].abs())
+    frame_image(frame, ImageKind::Normals)
+}
+
+/// The bytes before the pixels of a `w` x `h` image in `format`, for the formats that store
+/// rows uncompressed at fixed places (TGA, PPM); `None` for the others.
+pub(super) fn fixed_header(format: Format, w: u32, h: u32) -> Option<Vec<u8>> {
+    match format {
+        Format::Ppm => Some(format!("P6\n{w} {h}\n255\n").into_bytes()),
+        Format::Tga => {
+            // Uncompressed true-colour, 24 bits, rows stored bottom to top (origin bottom left).
+            let mut header = vec![0u8; 18];
+            header[2] = 2;
+            header[12..14].copy_from_slice(&(w as u16).to_le_bytes());
+            header[14..16].copy_from_slice(&(h as u16).to_le_bytes());
+            header[16] = 24;
+            Some(header)
+        }
+        _ => None,
+    }
+}
+
+/// Where a fixed-layout `format` ([`fixed_header`]) of `h` rows stores image row `y` (0 at the
+/// top): its index among the stored rows.
+pub(super) fn stored_row(format: Format, h: u32, y: u32) -> u32 {
+    if format == Format::Tga { h - 1 - y } else { y }
+}
+
+/// One image row's RGB bytes as a fixed-layout `format` stores them (TGA: BGR).
+pub(super) fn store_row(format: Format, rgb: &[u8], dst: &mut [u8]) {
+    if format == Format::Tga {
+        for (d, s) in dst.chunks_exact_mut(3).zip(rgb.chunks_exact(3)) {
+            d.copy_from_slice(&[s[2], s[1], s[0]]);
+        }
+    } else {
+        dst.copy_from_slice(rgb);
+    }
 }
 
 /// Encodes the 8-bit RGB image `data` (`w` x `h`, rows top to bottom) as PNG, TGA or PPM.
 pub(super) fn encode_rgb8(w: u32, h: u32, data: &[u8], format: Format) -> Result<Vec<u8>> {
-    let (w, h) = (w as usize, h as usize);
+    if let Some(header) = fixed_header(format, w, h) {
+        let mut out = filled(header.len() + data.len(), 0u8);
+        out[..header.len()].copy_from_slice(&header);
+        // In parallel, as the colour conversion (a serial loop here was part of every frame's
+        // serial tail). Each stored row is its image row's bytes as the format stores them.
+        let row = (w as usize * 3).max(1);
+        let rows_per_task = (PIXELS_PER_TASK / (w as usize).max(1)).max(1);
+        out[header.len()..]
+            .par_chunks_mut(row * rows_per_task)
+            .enumerate()
+            .for_each(|(task, stored)| {
+                for (j, dst) in stored.chunks_exact_mut(row).enumerate() {
+                    let y = stored_row(format, h, (task * rows_per_task + j) as u32) as usize;
+                    store_row(format, &data[y * row..(y + 1) * row], dst);
+                }
+            });
+        return Ok(out);
+    }
     match format {
-        Format::Ppm => {
-            let mut out = format!("P6\n{w} {h}\n255\n").into_bytes();
-            out.extend_from_slice(data);
-            Ok(out)
-        }
-        Format::Tga => {
-            // Uncompressed true-colour, 24 bits, rows stored bottom to top (origin bottom left).
-            let mut out = filled(18 + data.len(), 0u8);
-            out[2] = 2;
-            out[12..14].copy_from_slice(&(w as u16).to_le_bytes());
-            out[14..16].copy_from_slice(&(h as u16).to_le_bytes());
-            out[16] = 24;
-            // In parallel, as the colour conversion (a serial loop here was part of every
-            // frame's serial tail). Each stored row is its image row's bytes as BGR.
-            let row = (w * 3).max(1);
-            let rows_per_task = (PIXELS_PER_TASK / w.max(1)).max(1);
-            out[18..]
-                .par_chunks_mut(row * rows_per_task)
-                .enumerate()
-                .for_each(|(task, stored)| {
-                    for (j, dst) in stored.chunks_exact_mut(row).enumerate() {
-                        let image_row = h - 1 - (task * rows_per_task + j);
-                        let src = &data[image_row * row..(image_row + 1) * row];
-                        for (d, s) in dst.chunks_exact_mut(3).zip(src.chunks_exact(3)) {
-                            d.copy_from_slice(&[s[2], s[1], s[0]]);
-                        }
-                    }
-                });
-            Ok(out)
-        }
         Format::Png => {
             let mut out = Vec::new();
             let encoder = image::codecs::png::PngEncoder::new(&mut out);
-            image::ImageEncoder::write_image(
-                encoder,
-                data,
-                w as u32,
-                h as u32,
-                image::ExtendedColorType::Rgb8,
-            )
-            .map_err(|e| Error::Other(format!("cannot encode PNG: {e}")))?;
+            image::ImageEncoder::write_image(encoder, data, w, h, image::ExtendedColorType::Rgb8)
+                .map_err(|e| Error::Other(format!("cannot encode PNG: {e}")))?;
             Ok(out)
         }
-        Format::Exr | Format::Pfm | Format::Hdr => unreachable!("not an 8-bit format"),
+        _ => unreachable!("not an 8-bit format"),
     }
 }
 

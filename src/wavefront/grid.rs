@@ -12,7 +12,7 @@ use super::{BAND_ROWS, Band, stages};
 use crate::frame::Frame;
 use crate::grid::Grid;
 use crate::grid::picture::{self, GridView};
-use crate::options::{Progress, RenderOptions};
+use crate::options::{FinishedRows, Progress, RenderOptions};
 use crate::raytree::SegmentKind;
 use crate::scene::Scene;
 use crate::stats::RayCounts;
@@ -51,7 +51,7 @@ pub fn render_grid_packet(
             }
             let mut counts = RayCounts::default();
             counts.count_many(SegmentKind::Eye, 0, rays.len() as u64);
-            progress(band.rows);
+            progress(&FinishedRows::counted(band.rows));
             counts
         })
         .reduce(RayCounts::default, RayCounts::merged);

@@ -12,7 +12,7 @@ use super::queue::RayQueue;
 use super::{BAND_ROWS, Band, stages};
 use crate::frame::CostMap;
 use crate::geometry::Geometry;
-use crate::options::{Progress, RenderOptions};
+use crate::options::{FinishedRows, Progress, RenderOptions};
 use crate::packet::HitPacket;
 use crate::scene::Scene;
 use crate::simd::LANES;
@@ -44,7 +44,7 @@ pub fn eye_ray_costs(
                     out[rays.pixel[first + lane] as usize] = c;
                 }
             }
-            progress(band.rows);
+            progress(&FinishedRows::counted(band.rows));
         });
     CostMap {
         width: w,

@@ -1,0 +1,109 @@
+//! Claim: a TGA or PPM image, written while the render runs (each band of rows as the film
+//! finishes it), holds exactly the pixels of the image encoded from the finished frame: a PNG of
+//! the same render, which is never written that way. For either tracer, one thread or several,
+//! a crop window whose rows do not start on a band, several samples with a filter reaching
+//! into the neighbouring bands, and the depth and normal images too. `--stats` counts the
+//! images written while rendering, so a silent fallback to encoding afterwards fails here.
+
+mod common;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use common::{copy_scene, read_image, scratch_dir, whitted};
+
+/// The `key=value` pairs of the run's `stats:` line.
+fn stats(stderr: &str) -> HashMap<String, String> {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("stats:"))
+        .unwrap_or_else(|| panic!("no stats line:\n{stderr}"));
+    line["stats:".len()..]
+        .split_whitespace()
+        .filter_map(|kv| kv.split_once('='))
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
+}
+
+/// Renders `scene` in `dir` with `extra` options, writing colour, depth and normal images with
+/// extension `ext`; returns how many were written while rendering.
+fn render(dir: &Path, scene: &str, ext: &str, extra: &[&str]) -> usize {
+    let (color, depth, normals) = (
+        format!("color.{ext}"),
+        format!("depth.{ext}"),
+        format!("normals.{ext}"),
+    );
+    let mut args = vec![
+        "render",
+        scene,
+        "-o",
+        &color,
+        "--depth",
+        "8",
+        "14",
+        &depth,
+        "--normals",
+        &normals,
+        "--size",
+        "61",
+        "43",
+        "--shadows",
+        "--stats",
+    ];
+    args.extend_from_slice(extra);
+    let run = whitted(dir, &args);
+    assert_eq!(run.code, Some(0), "{args:?}:\n{}", run.stderr);
+    stats(&run.stderr)["streamed_images"].parse().unwrap()
+}
+
+#[test]
+fn tga_and_ppm_written_while_rendering_hold_the_pixels_of_the_finished_frame() {
+    let dir = scratch_dir("images_written_while_rendering");
+    let scene = copy_scene("mesh.txt", &dir);
+    let scene = scene.file_name().unwrap().to_str().unwrap();
+    let settings: [&[&str]; 6] = [
+        &["--threads", "1"],
+        &["--threads", "3"],
+        &["--threads", "2", "--tracer", "reference"],
+        // rows 5..37: the window starts and ends inside bands of 8 rows
+        &["--threads", "2", "--crop", "3", "58", "5", "37"],
+        &["--threads", "2", "--samples", "4", "--filter", "tent", "9"],
+        &[
+            "--threads",
+            "2",
+            "--samples",
+            "4",
+            "--filter",
+            "gaussian",
+            "3",
+            "--crop",
+            "0",
+            "61",
+            "13",
+            "30",
+        ],
+    ];
+    for extra in settings {
+        assert_eq!(
+            render(&dir, scene, "png", extra),
+            0,
+            "{extra:?}: PNG is encoded afterwards"
+        );
+        for ext in ["tga", "ppm"] {
+            assert_eq!(render(&dir, scene, ext, extra), 3, "{extra:?}: {ext}");
+            for image in ["color", "depth", "normals"] {
+                let want = read_image(&dir.join(format!("{image}.png")));
+                let got = read_image(&dir.join(format!("{image}.{ext}")));
+                assert_eq!(
+                    (got.width, got.height),
+                    (want.width, want.height),
+                    "{extra:?}"
+                );
+                assert!(
+                    got.data == want.data,
+                    "{extra:?}: {image}.{ext} differs from the PNG"
+                );
+            }
+        }
+    }
+}
