@@ -488,7 +488,7 @@ pub(crate) fn write_atomic_files(files: &[(&Path, Source)], action: &'static str
                 if streamed::link_unnamed(file, tmp).is_ok() {
                     return Ok(());
                 }
-                // No link through /proc (a sandbox may hide it): the bytes are copied instead.
+                // Not linked (no /proc in some sandboxes, or the name taken): copy the bytes.
                 let mut named = fs::File::create(tmp).map_err(|e| (*path, e))?;
                 let mut from: &fs::File = file;
                 from.seek(SeekFrom::Start(0)).map_err(|e| (*path, e))?;
