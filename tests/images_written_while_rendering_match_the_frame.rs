@@ -28,6 +28,12 @@ fn stats(stderr: &str) -> HashMap<String, String> {
 /// Renders `scene` in `dir` with `extra` options, writing colour, depth and normal images with
 /// extension `ext`; returns how many were written while rendering.
 fn render(dir: &Path, scene: &str, ext: &str, extra: &[&str]) -> usize {
+    // 61x43 unless `extra` gives a size
+    let size: &[&str] = if extra.contains(&"--size") {
+        &[]
+    } else {
+        &["--size", "61", "43"]
+    };
     let (color, depth, normals) = (
         format!("color.{ext}"),
         format!("depth.{ext}"),
@@ -44,12 +50,10 @@ fn render(dir: &Path, scene: &str, ext: &str, extra: &[&str]) -> usize {
         &depth,
         "--normals",
         &normals,
-        "--size",
-        "61",
-        "43",
         "--shadows",
         "--stats",
     ];
+    args.extend_from_slice(size);
     args.extend_from_slice(extra);
     let run = whitted(dir, &args);
     assert_eq!(run.code, Some(0), "{args:?}:\n{}", run.stderr);
@@ -61,8 +65,10 @@ fn tga_and_ppm_written_while_rendering_hold_the_pixels_of_the_finished_frame() {
     let dir = scratch_dir("images_written_while_rendering");
     let scene = copy_scene("mesh.txt", &dir);
     let scene = scene.file_name().unwrap().to_str().unwrap();
-    let settings: [&[&str]; 6] = [
+    let settings: [&[&str]; 7] = [
         &["--threads", "1"],
+        // 1,500 bytes a row: chunks of 174 rows, three of them, each written as it completes
+        &["--threads", "2", "--size", "500", "400"],
         &["--threads", "3"],
         &["--threads", "2", "--tracer", "reference"],
         // rows 5..37: the window starts and ends inside bands of 8 rows
