@@ -51,8 +51,9 @@ pub struct StreamedImage {
 #[derive(Default)]
 struct Chunk {
     stored: Vec<u8>,
+    /// Rows taken in; the chunk is written when they are all its rows (the film hands each row
+    /// over once: more means a fault, and the image is then encoded after the render).
     rows: u32,
-    written: bool,
 }
 
 impl StreamedImage {
@@ -139,8 +140,7 @@ impl StreamedImage {
                 );
             }
             chunk.rows += end - y;
-            if chunk.rows == rows.len() as u32 && !chunk.written {
-                chunk.written = true;
+            if chunk.rows == rows.len() as u32 {
                 let stored = std::mem::take(&mut chunk.stored);
                 drop(chunk);
                 let offset = self.header + first as u64 * row as u64;
@@ -170,7 +170,7 @@ impl StreamedImage {
         !self.failed.load(Ordering::Relaxed)
             && self.chunks.iter().enumerate().all(|(c, chunk)| {
                 let chunk = chunk.lock().unwrap_or_else(PoisonError::into_inner);
-                chunk.written && chunk.rows == self.chunk_range(c as u32).len() as u32
+                chunk.rows == self.chunk_range(c as u32).len() as u32
             })
     }
 
