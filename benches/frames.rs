@@ -135,8 +135,9 @@ fn bench_frames(c: &mut Criterion, group_name: &str, frames: &[Frame]) {
 }
 
 fn frames(c: &mut Criterion) {
-    // the binary's allocator policy (`whitted::hugepages`)
+    // the binary's allocator policy for `whitted render` (`whitted::hugepages`)
     whitted::hugepages::keep_freed_memory();
+    whitted::hugepages::share_one_heap();
     bench_frames(c, "frames/ours", &our_scenes());
     if let Some(course) = course_dir() {
         bench_frames(c, "frames/course", &course_scenes(&course));

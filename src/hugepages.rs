@@ -14,6 +14,10 @@
 //! left to itself, hands blocks from 128 KiB up to the kernel on every free and takes fresh
 //! pages for the next, so a BVH built again (the benchmark's repetitions, an animation) pays a
 //! page fault (1.7 us each on this project's VMs) for each 4 KiB it touches again.
+//!
+//! [`share_one_heap`] is a third, for one-frame processes only (`whitted render`): every
+//! thread allocates from one heap, so memory one worker frees (the OBJ reader's chunks) is
+//! the next allocation's, whichever worker makes it.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
@@ -75,6 +79,22 @@ pub fn keep_freed_memory() {
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES as libc::c_int);
         libc::mallopt(libc::M_TRIM_THRESHOLD, TRIM_THRESHOLD_BYTES as libc::c_int);
+    }
+}
+
+/// Makes every thread allocate from glibc's main heap (`M_ARENA_MAX` 1) instead of a heap of
+/// its own; `whitted render` calls it before it starts its workers. A frame then takes fresh
+/// pages only as its peak grows, not once per thread: the course's bunny frame (800x800, 40k
+/// triangles) took 952–1,938 page faults at 1 thread and 1,638–1,992 at 2, against 2,689–2,690
+/// and 2,983–3,900 (PERF.md, sitting 53). Not for the benchmark: in a process that builds again
+/// and again, the spheres4096 build was slower with it (PERF.md, sittings 34 and 53). Elsewhere
+/// (other C libraries, other systems) it does nothing.
+pub fn share_one_heap() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets one of malloc's tuning parameters, under malloc's own locks;
+    // threads that already have a heap keep it, and a refused setting leaves glibc's default.
+    unsafe {
+        libc::mallopt(libc::M_ARENA_MAX, 1);
     }
 }
 

@@ -62,6 +62,8 @@ fn execute_quietly(cmd: Command) -> Result<()> {
     if let Some((_, _, json)) = &cmd.ray_tree {
         output::check_creatable(json, "write ray tree")?;
     }
+    // One heap for every worker started below: a frame reuses what its phases free.
+    crate::hugepages::share_one_heap();
     let mut phases: Vec<(&'static str, Duration)> = Vec::new();
     let t0 = Instant::now();
     // The OBJ loader reads big meshes in parallel, and the images are converted and encoded in
