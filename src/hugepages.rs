@@ -83,12 +83,12 @@ pub fn keep_freed_memory() {
 }
 
 /// Makes every thread allocate from glibc's main heap (`M_ARENA_MAX` 1) instead of a heap of
-/// its own; `whitted render` calls it before it starts its workers. A frame then takes fresh
-/// pages only as its peak grows, not once per thread: the course's bunny frame (800x800, 40k
-/// triangles) took 952–1,938 page faults at 1 thread and 1,638–1,992 at 2, against 2,689–2,690
-/// and 2,983–3,900 (PERF.md, sitting 53). Not for the benchmark: in a process that builds again
-/// and again, the spheres4096 build was slower with it (PERF.md, sittings 34 and 53). Elsewhere
-/// (other C libraries, other systems) it does nothing.
+/// its own; `whitted render` calls it before it starts its workers. A frame's workers then reuse
+/// what any of them frees, and the frame takes fewer fresh pages at either thread count: the
+/// course's bunny frame (800x800, 40k triangles) took 952–1,939 page faults at 1 thread and
+/// 1,581–1,926 at 2, against 2,689–2,690 and 2,983–3,900 (PERF.md, sitting 53). Not for the
+/// benchmark: in a process that builds again and again, the spheres4096 build was slower with it
+/// (PERF.md, sittings 34 and 53). Elsewhere (other C libraries, other systems) it does nothing.
 pub fn share_one_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only sets one of malloc's tuning parameters, under malloc's own locks;

@@ -20,7 +20,8 @@ use crate::stats::{RayCounts, StatsReport, peak_memory_kib};
 use crate::witness;
 
 /// Loads the scene, renders it and writes the requested images, ray tree and statistics.
-/// Notes about inert course options follow a success (an error stays the only line).
+/// Notes about inert course options follow a success (an error stays the only line). Sets the
+/// process's malloc to one heap for all threads first ([`crate::hugepages::share_one_heap`]).
 pub fn execute(cmd: Command) -> Result<()> {
     let notes = cmd.notes.clone();
     execute_quietly(cmd)?;
