@@ -77,8 +77,9 @@ pub struct Surface<'m> {
 /// Prepares `hit` for shading; `None` means the pixel contribution is black (a back face
 /// without `shade_back`). A texture's blended parameters are written to `blend`, which the
 /// surface then borrows; a plain material is borrowed from the scene, not copied (the copies
-/// waited on their own stores: PERF.md, sitting 38).
-#[inline]
+/// waited on their own stores: PERF.md, sitting 38). Always inlined, so that the packet
+/// tracer's shading loop (`wavefront::stages::shade_hits`) keeps it inside (sitting 54).
+#[inline(always)]
 pub fn surface<'m>(
     scene: &'m Scene,
     ray: &Ray,

@@ -1,6 +1,12 @@
 //! The wavefront's stages, in the order the driver calls them. Each reads one queue and writes
 //! others or the band's pixels; the routing of a shaded ray's children is [`crate::shade`]'s
 //! (`scatter`), shared with the reference tracer.
+//!
+//! The two big stages, [`shade_hits`] and [`trace_shadow_rays`], are never inlined into the
+//! driver, and the shading of a hit (`shade::surface`) always is into `shade_hits`: the shape
+//! the compiler gave them before sitting 54. Left to it, that shape changed when a PNG encoder
+//! was added elsewhere in the crate: both stages went into the driver, and the shading out of
+//! them (`perf` profiles of the showcase, PERF.md, sitting 54).
 
 use bumpalo::Bump;
 
@@ -151,6 +157,7 @@ pub fn intersect_closest<'s>(
 
 /// Shades every queued ray's hit: background for misses, ambient and direct light (through
 /// queued shadow rays when shadows are on) for hits, and children queued for the next bounce.
+#[inline(never)]
 pub fn shade_hits(
     ctx: &Context<'_>,
     bounce: u32,
@@ -224,6 +231,7 @@ pub fn shade_hits(
 /// consecutive rays in groups of [`MAX_STREAM`], through [`Geometry::occluded_batch`] (a stream
 /// where the rays are coherent, as towards a point light from neighbouring hits). With
 /// transparent shadows, each lane walks its hits in order, tinting by their transparent colour.
+#[inline(never)]
 pub fn trace_shadow_rays(ctx: &Context<'_>, shadows: &ShadowQueue<'_>, out: &mut BandOutput<'_>) {
     let group = LANES * MAX_STREAM;
     for first in (0..shadows.len()).step_by(group) {
