@@ -49,8 +49,9 @@
 //!                          v
 //!            output/: Frame -> PNG / TGA / PPM, EXR / PFM / HDR, written atomically; a
 //!                     crop's piece records its place and render (EXR window or sidecar);
-//!                     TGA and PPM written in chunks as the film finishes rows (the
-//!                     progress hook hands them out), into a file named once complete
+//!                     8-bit images made as the film finishes rows (the progress hook
+//!                     hands them out): TGA and PPM written in chunks into a file named
+//!                     once complete, PNG compressed row by row in order
 //!            merge.rs: pieces --checked, assembled--> the full image (`whitted merge`)
 //!            sample_images.rs: the samples and the filter drawn (-render_samples/-render_filter)
 //!

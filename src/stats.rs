@@ -150,8 +150,9 @@ pub struct StatsReport {
     pub rays: RayCounts,
     /// Named phases and their durations, in order (parse, render, write, ...).
     pub phases: Vec<(&'static str, Duration)>,
-    /// Images written while the render ran (TGA and PPM, `output::StreamedImage`): their
-    /// conversion and writing is then part of the render phase, not of the write phase.
+    /// Images made while the render ran (TGA, PPM and PNG, `output::StreamedImage`): their
+    /// conversion, and a PNG's compression, is then part of the render phase, not of the write
+    /// phase.
     pub streamed_images: usize,
     /// Peak resident memory, if known.
     pub peak_kib: Option<u64>,

@@ -111,8 +111,8 @@ fn execute_quietly(cmd: Command) -> Result<()> {
         .into_iter()
         .flatten()
         .collect();
-        // TGA and PPM images are written as the render finishes their rows (the options name
-        // a different file for each image).
+        // 8-bit images are made as the render finishes their rows (the options name a
+        // different file for each image).
         let mut streams: Vec<Option<StreamedImage>> = images
             .iter()
             .map(|&(kind, path)| StreamedImage::create(path, kind, win.width(), win.height()))

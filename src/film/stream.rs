@@ -12,7 +12,7 @@
 //! ```
 //!
 //! The progress hook sees each row once, with the pixels the frame will hold: the command line
-//! writes TGA and PPM images from them while the render runs (`output::StreamedImage`).
+//! makes its 8-bit images from them while the render runs (`output::StreamedImage`).
 //!
 //! The bytes do not depend on the thread count or on which thread did what: a band's samples
 //! are a function of the band, and an output pixel a function of the samples (one fixed

@@ -3,9 +3,10 @@
 //! HDR: `float.rs`), and a render's pieces ([`piece`]: the place of a cropped image in the full
 //! one, and the fingerprint of the render it belongs to). Every file is written to a temporary
 //! file in the target folder and renamed into place, so a failed write never leaves a
-//! half-written image and an existing file stays intact until the new one is complete. A TGA
-//! or PPM image may instead be written while the render runs ([`StreamedImage`]), into an
-//! unnamed file that gets the temporary name, then the real one, the same way.
+//! half-written image and an existing file stays intact until the new one is complete. An
+//! 8-bit image may instead be written while the render runs ([`StreamedImage`]): a TGA or PPM
+//! into an unnamed file that gets the temporary name, then the real one, the same way; a PNG
+//! compressed band by band, its bytes then written as any file's.
 //!
 //! ```text
 //! Frame --frame_raster(kind, format)--> Raster (the samples a file stores) --encode--> bytes
@@ -21,6 +22,7 @@
 
 mod float;
 pub mod piece;
+mod png_rows;
 mod rgb8;
 mod streamed;
 
@@ -327,7 +329,7 @@ pub(crate) enum Source<'a> {
 /// image in a format that cannot record its place itself. An EXR records its place and
 /// fingerprint in itself. The fingerprint is hashed only for a file that records it.
 /// `streamed`, the image written during the render, stands for the image when it holds every
-/// row ([`StreamedImage::into_file`]); otherwise the image is encoded from the frame.
+/// row ([`StreamedImage::into_content`]); otherwise the image is encoded from the frame.
 pub fn frame_files(
     frame: &Frame,
     kind: ImageKind,
@@ -339,8 +341,8 @@ pub fn frame_files(
     let place = Place::of(frame);
     let sidecar = !format.records_its_place() && !place.is_whole();
     let fingerprint = (sidecar || format.records_its_place()).then(|| print.of(kind));
-    let content = match streamed.and_then(StreamedImage::into_file) {
-        Some(file) => Content::Written(file),
+    let content = match streamed.and_then(StreamedImage::into_content) {
+        Some(content) => content,
         None => {
             let raster = frame_raster(frame, kind, format);
             Content::Bytes(encode_raster(

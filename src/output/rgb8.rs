@@ -186,13 +186,7 @@ pub(super) fn encode_rgb8(w: u32, h: u32, data: &[u8], format: Format) -> Result
         return Ok(out);
     }
     match format {
-        Format::Png => {
-            let mut out = Vec::new();
-            let encoder = image::codecs::png::PngEncoder::new(&mut out);
-            image::ImageEncoder::write_image(encoder, data, w, h, image::ExtendedColorType::Rgb8)
-                .map_err(|e| Error::Other(format!("cannot encode PNG: {e}")))?;
-            Ok(out)
-        }
+        Format::Png => super::png_rows::encode_png(w, h, data),
         _ => unreachable!("not an 8-bit format"),
     }
 }

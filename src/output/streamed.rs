@@ -1,28 +1,41 @@
-//! 8-bit images written while the render runs. A TGA or PPM stores its rows uncompressed at
-//! fixed places, so the rows the film finishes ([`RowPixels`], through the render's progress
-//! hook) are converted at once and gathered into chunks of about [`CHUNK_BYTES`]; each chunk is
-//! written when complete, and the disk starts taking it. The image's durable write after the
-//! render is then its last chunk and a short `fsync`, not the whole file: for a 10-megapixel
-//! TGA, 7–10 ms instead of 190–240 (PERF.md, sitting 52). The file has no name until
-//! [`super::write_files`] gives it one, so an interrupted render leaves nothing in the folder;
-//! the image still appears by a rename, whole, or not at all. Linux only (an unnamed file,
-//! `O_TMPFILE`); elsewhere, and for PNG or the float formats, images are encoded after the
-//! render as before, and so is an image whose rows did not all arrive.
+//! 8-bit images written while the render runs, from the rows the film finishes ([`RowPixels`],
+//! through the render's progress hook), so that little of their writing is left after the
+//! render. Two ways, by format:
+//!
+//! - A TGA or PPM stores its rows uncompressed at fixed places: the rows are converted at once
+//!   and gathered into chunks of about [`CHUNK_BYTES`]; each chunk is written when complete, and
+//!   the disk starts taking it. The image's durable write after the render is then its last
+//!   chunk and a short `fsync`, not the whole file: for a 10-megapixel TGA, 7–10 ms instead of
+//!   190–240 (PERF.md, sitting 52). The file has no name until [`super::write_files`] gives it
+//!   one, so an interrupted render leaves nothing in the folder; the image still appears by a
+//!   rename, whole, or not at all. Linux only (an unnamed file, `O_TMPFILE`).
+//! - A PNG is one compressed stream of its rows in order: each band's rows are converted at
+//!   once and wait until the rows above them are in; then the thread that brought the missing
+//!   rows compresses every row that can go ([`PngRows`]), while the other threads trace. The
+//!   file's bytes are handed over after the render and written as any file is; they are those
+//!   of the PNG encoded from the finished frame ([`super::png_rows`]).
+//!
+//! A TGA or PPM off Linux, a float format, and an image whose rows did not all arrive are
+//! encoded after the render instead. For the showcase's 1280x960 PNG, the write after the render
+//! went from 9–12 ms to about 2 (PERF.md, sitting 54).
 //!
 //! ```text
-//! film --RowPixels--> StreamedImage::rows: kind_to_bytes, store_row --> its chunk
-//!                     a chunk complete --> pwrite + writeback started (sync_file_range)
-//! after the render: into_file (every chunk written?) --> write_files: fsync, link, rename
+//! film --RowPixels--> StreamedImage::rows: kind_to_bytes -->
+//!     TGA, PPM: store_row --> its chunk; a chunk complete --> pwrite + writeback (sync_file_range)
+//!     PNG: waiting by first row --> the rows that can go, in order --> PngRows (filter, compress)
+//! after the render: into_content (every row in?) --> write_files: fsync, link or write, rename
 //! ```
 
+use std::collections::BTreeMap;
 use std::fs::File;
 use std::ops::Range;
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Mutex, PoisonError};
 
+use super::png_rows::PngRows;
 use super::rgb8::{Pixels, fixed_header, kind_to_bytes, store_row, stored_row};
-use super::{Format, ImageKind};
+use super::{Content, Format, ImageKind};
 use crate::options::RowPixels;
 
 /// File bytes written at once, about: rows are gathered into chunks of this size, as one write
@@ -30,21 +43,35 @@ use crate::options::RowPixels;
 /// durable write after the render (PERF.md, sitting 52).
 const CHUNK_BYTES: usize = 1 << 18;
 
-/// An image being written as the render finishes its rows: an unnamed file in its folder.
+/// An image being written as the render finishes its rows.
 pub struct StreamedImage {
-    file: File,
     kind: ImageKind,
-    format: Format,
     width: u32,
     height: u32,
+    how: How,
+    /// A write failed, or rows came without the pixels this image needs, or twice: the image
+    /// is then encoded after the render instead.
+    failed: AtomicBool,
+}
+
+/// How the rows become the file, by format.
+enum How {
+    /// TGA, PPM: rows stored in place in an unnamed file, chunk by chunk.
+    InPlace(InPlace),
+    /// PNG: rows compressed in order, into bytes handed over after the render (boxed: the
+    /// encoder's state is large).
+    Compressed(Box<Compressed>),
+}
+
+/// A TGA or PPM image in an unnamed file in its folder.
+struct InPlace {
+    file: File,
+    format: Format,
     header: u64,
     /// Rows per chunk: chunk `c` holds the window's rows `c * chunk_rows..`.
     chunk_rows: u32,
     /// Each chunk's stored bytes while its rows come in, and how many have.
     chunks: Vec<Mutex<Chunk>>,
-    /// A write failed, or rows came without the pixels this image needs: the image is then
-    /// encoded after the render instead.
-    failed: AtomicBool,
 }
 
 /// One chunk's rows as the file stores them, gathered until all are in.
@@ -56,15 +83,26 @@ struct Chunk {
     rows: u32,
 }
 
+/// A PNG compressed as its rows come.
+struct Compressed {
+    /// Converted rows not compressed yet, by their first row: each band's RGB bytes.
+    waiting: Mutex<BTreeMap<u32, Vec<u8>>>,
+    /// The encoder, held by the one thread compressing.
+    encoder: Mutex<PngRows>,
+    /// The first row not compressed yet (written under `encoder`).
+    next: AtomicU32,
+}
+
 impl StreamedImage {
     /// An image of `kind` for `path`, `width` x `height` pixels, written as its rows are
-    /// finished; `None` where that cannot be (not a TGA or PPM, not Linux, no unnamed files in
-    /// that folder): the image is then encoded after the render.
+    /// finished; `None` where that cannot be (a float format; a TGA or PPM where there are no
+    /// unnamed files: not Linux, or not in that folder): the image is then encoded after the
+    /// render.
     pub fn create(path: &Path, kind: ImageKind, width: u32, height: u32) -> Option<StreamedImage> {
         StreamedImage::chunked(path, kind, width, height, CHUNK_BYTES)
     }
 
-    /// [`create`](Self::create), with chunks of about `chunk_bytes`.
+    /// [`create`](Self::create), with chunks of about `chunk_bytes` (TGA, PPM).
     fn chunked(
         path: &Path,
         kind: ImageKind,
@@ -73,28 +111,39 @@ impl StreamedImage {
         chunk_bytes: usize,
     ) -> Option<StreamedImage> {
         let format = Format::for_path(path).ok()?;
-        let header = fixed_header(format, width, height)?;
-        let file = unnamed_file(path)?;
-        write_at(&file, &header, 0).ok()?;
-        let chunk_rows =
-            (chunk_bytes / (width as usize * 3).max(1)).clamp(1, height.max(1) as usize);
-        let chunks = (height as usize).div_ceil(chunk_rows);
+        let how = if format == Format::Png {
+            How::Compressed(Box::new(Compressed {
+                waiting: Mutex::default(),
+                encoder: Mutex::new(PngRows::new(width, height).ok()?),
+                next: AtomicU32::new(0),
+            }))
+        } else {
+            let header = fixed_header(format, width, height)?;
+            let file = unnamed_file(path)?;
+            write_at(&file, &header, 0).ok()?;
+            let chunk_rows =
+                (chunk_bytes / (width as usize * 3).max(1)).clamp(1, height.max(1) as usize);
+            let chunks = (height as usize).div_ceil(chunk_rows);
+            How::InPlace(InPlace {
+                file,
+                format,
+                header: header.len() as u64,
+                chunk_rows: chunk_rows as u32,
+                chunks: (0..chunks).map(|_| Mutex::default()).collect(),
+            })
+        };
         Some(StreamedImage {
-            file,
             kind,
-            format,
             width,
             height,
-            header: header.len() as u64,
-            chunk_rows: chunk_rows as u32,
-            chunks: (0..chunks).map(|_| Mutex::default()).collect(),
+            how,
             failed: AtomicBool::new(false),
         })
     }
 
-    /// Takes the finished rows `px` (rows of the window, as wide as it) into their chunks, and
-    /// writes each chunk they complete, starting its writeback. Called from the render's worker
-    /// threads, once for each band of rows.
+    /// Takes the finished rows `px` (rows of the window, as wide as it): writes each chunk of
+    /// a TGA or PPM they complete, starting its writeback; compresses the rows of a PNG that
+    /// can go. Called from the render's worker threads, once for each band of rows.
     pub fn rows(&self, px: &RowPixels<'_>) {
         if self.failed.load(Ordering::Relaxed) {
             return;
@@ -114,25 +163,66 @@ impl StreamedImage {
             depth: px.depth,
             normal: px.normal,
         };
-        let row = w * 3;
-        let mut rgb = vec![0u8; n * row];
+        let mut rgb = vec![0u8; n * w * 3];
         kind_to_bytes(self.kind, pixels, 0, &mut rgb);
-        let mut y = px.rows.start;
-        while y < px.rows.end {
+        let written = match &self.how {
+            How::InPlace(img) => img.rows(px.rows.clone(), &rgb, self),
+            How::Compressed(img) => img.rows(px.rows.start, rgb, self),
+        };
+        if !written {
+            self.failed.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// True if every row was written (or compressed) and nothing failed.
+    pub fn complete(&self) -> bool {
+        !self.failed.load(Ordering::Relaxed)
+            && match &self.how {
+                How::InPlace(img) => img.chunks.iter().enumerate().all(|(c, chunk)| {
+                    let chunk = chunk.lock().unwrap_or_else(PoisonError::into_inner);
+                    chunk.rows == img.chunk_range(c as u32, self.height).len() as u32
+                }),
+                How::Compressed(img) => img.next.load(Ordering::Acquire) == self.height,
+            }
+    }
+
+    /// What the file holds, if [`complete`](Self::complete): the unnamed file of a TGA or PPM,
+    /// the bytes of a PNG. `None` means the image must be encoded from the frame instead.
+    pub fn into_content(self) -> Option<Content> {
+        if !self.complete() {
+            return None;
+        }
+        match self.how {
+            How::InPlace(img) => Some(Content::Written(img.file)),
+            How::Compressed(img) => {
+                let encoder = img.encoder.into_inner().ok()?;
+                encoder.finish().ok().map(Content::Bytes)
+            }
+        }
+    }
+}
+
+impl InPlace {
+    /// Stores the image rows `rows` (their RGB bytes `rgb`) in their chunks and writes the
+    /// chunks they complete; false if a write failed.
+    fn rows(&self, rows: Range<u32>, rgb: &[u8], image: &StreamedImage) -> bool {
+        let row = image.width as usize * 3;
+        let mut y = rows.start;
+        while y < rows.end {
             let c = y / self.chunk_rows;
-            let rows = self.chunk_range(c);
-            let end = rows.end.min(px.rows.end);
+            let chunk_rows = self.chunk_range(c, image.height);
+            let end = chunk_rows.end.min(rows.end);
             let mut chunk = self.chunks[c as usize]
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner);
             if chunk.stored.is_empty() {
-                chunk.stored = vec![0u8; rows.len() * row];
+                chunk.stored = vec![0u8; chunk_rows.len() * row];
             }
             // The chunk's rows are consecutive in the file, in one order or the other.
-            let first = self.first_stored(rows.clone());
+            let first = self.first_stored(chunk_rows.clone(), image.height);
             for y in y..end {
-                let at = (stored_row(self.format, self.height, y) - first) as usize * row;
-                let src = (y - px.rows.start) as usize * row;
+                let at = (stored_row(self.format, image.height, y) - first) as usize * row;
+                let src = (y - rows.start) as usize * row;
                 store_row(
                     self.format,
                     &rgb[src..src + row],
@@ -140,44 +230,74 @@ impl StreamedImage {
                 );
             }
             chunk.rows += end - y;
-            if chunk.rows == rows.len() as u32 {
+            if chunk.rows == chunk_rows.len() as u32 {
                 let stored = std::mem::take(&mut chunk.stored);
                 drop(chunk);
                 let offset = self.header + first as u64 * row as u64;
                 if write_at(&self.file, &stored, offset).is_err() {
-                    self.failed.store(true, Ordering::Relaxed);
-                    return;
+                    return false;
                 }
                 start_writeback(&self.file, offset, stored.len() as u64);
             }
             y = end;
         }
+        true
     }
 
-    /// The window's rows in chunk `c`.
-    fn chunk_range(&self, c: u32) -> Range<u32> {
-        c * self.chunk_rows..((c + 1) * self.chunk_rows).min(self.height)
+    /// The window's rows in chunk `c` of an image `height` rows high.
+    fn chunk_range(&self, c: u32, height: u32) -> Range<u32> {
+        c * self.chunk_rows..((c + 1) * self.chunk_rows).min(height)
     }
 
     /// The first stored row (in file order) of the image rows `rows`.
-    fn first_stored(&self, rows: Range<u32>) -> u32 {
+    fn first_stored(&self, rows: Range<u32>, height: u32) -> u32 {
         let (a, b) = (rows.start, rows.end - 1);
-        stored_row(self.format, self.height, a).min(stored_row(self.format, self.height, b))
+        stored_row(self.format, height, a).min(stored_row(self.format, height, b))
     }
+}
 
-    /// True if every row was written and no write failed.
-    pub fn complete(&self) -> bool {
-        !self.failed.load(Ordering::Relaxed)
-            && self.chunks.iter().enumerate().all(|(c, chunk)| {
-                let chunk = chunk.lock().unwrap_or_else(PoisonError::into_inner);
-                chunk.rows == self.chunk_range(c as u32).len() as u32
-            })
-    }
-
-    /// The file, if [`complete`](Self::complete); `None` means the image must be encoded from
-    /// the frame instead.
-    pub fn into_file(self) -> Option<File> {
-        self.complete().then_some(self.file)
+impl Compressed {
+    /// Puts the rows from `first` on (their RGB bytes `rgb`) in waiting, then compresses every
+    /// row that can go, unless another thread is compressing: that one then takes them too, as
+    /// it looks again after letting the encoder go. False if the rows came before (a fault) or
+    /// the encoder failed.
+    fn rows(&self, first: u32, rgb: Vec<u8>, image: &StreamedImage) -> bool {
+        {
+            let mut waiting = self.waiting.lock().unwrap_or_else(PoisonError::into_inner);
+            if first < self.next.load(Ordering::Acquire) || waiting.insert(first, rgb).is_some() {
+                return false;
+            }
+        }
+        let row = image.width as usize * 3;
+        loop {
+            let Ok(mut encoder) = self.encoder.try_lock() else {
+                // Held (its holder looks again after letting it go), or poisoned: then
+                // `into_content` finds it so, and the image is encoded after the render.
+                return true;
+            };
+            loop {
+                let next = self.next.load(Ordering::Relaxed);
+                let band = self
+                    .waiting
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .remove(&next);
+                let Some(band) = band else { break };
+                if encoder.push(&band).is_err() {
+                    return false;
+                }
+                self.next
+                    .store(next + (band.len() / row.max(1)) as u32, Ordering::Release);
+            }
+            drop(encoder);
+            // Rows put in waiting since the last look, while the encoder was held, are this
+            // thread's to compress.
+            let next = self.next.load(Ordering::Acquire);
+            let waiting = self.waiting.lock().unwrap_or_else(PoisonError::into_inner);
+            if !waiting.contains_key(&next) {
+                return true;
+            }
+        }
     }
 }
 
@@ -350,7 +470,7 @@ mod tests {
         ];
         for (w, h) in [(1, 1), (5, 3), (17, 40), (64, 9)] {
             let f = frame(w, h, &mut rng);
-            for format in [Format::Tga, Format::Ppm] {
+            for format in [Format::Tga, Format::Ppm, Format::Png] {
                 for kind in kinds {
                     // chunks of one row, a few rows, rows not dividing the image, the whole image
                     for chunk_bytes in [
@@ -362,9 +482,8 @@ mod tests {
                         let path = dir.join(format!("img.{}", format.extension()));
                         let image = StreamedImage::chunked(&path, kind, w, h, chunk_bytes).unwrap();
                         feed(&image, &f, &mut rng, None, true);
-                        let file = image.into_file().expect("every row was written");
-                        write_atomic_files(&[(&path, Source::Written(&file))], "write image")
-                            .unwrap();
+                        let content = image.into_content().expect("every row was written");
+                        write_atomic_files(&[(&path, content.source())], "write image").unwrap();
                         let want = frame_image(&f, kind);
                         let want = encode_rgb8(w, h, &want.data, format).unwrap();
                         let what =
@@ -373,6 +492,45 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn png_rows_from_several_threads_at_once_give_the_bytes_encoded_from_the_frame() {
+        let mut rng = Rng(77);
+        let (w, h) = (256, 48);
+        let f = frame(w, h, &mut rng);
+        let want = encode_rgb8(w, h, &frame_image(&f, ImageKind::Color).data, Format::Png).unwrap();
+        let path = folder("threads").join("img.png");
+        // Six bands of 8 rows, one to a thread, all six started at once, so that they meet at
+        // the encoder: rows whose thread finds it held are compressed by the thread holding it.
+        for round in 0..200 {
+            let mut order: Vec<u32> = (0..6).collect();
+            for i in (1..order.len()).rev() {
+                order.swap(i, (rng.next() % (i as u32 + 1)) as usize);
+            }
+            let image = StreamedImage::create(&path, ImageKind::Color, w, h).unwrap();
+            let start = std::sync::Barrier::new(order.len());
+            std::thread::scope(|s| {
+                for &band in &order {
+                    let (image, f, start) = (&image, &f, &start);
+                    s.spawn(move || {
+                        let rows = band * 8..band * 8 + 8;
+                        let px = rows.start as usize * w as usize..rows.end as usize * w as usize;
+                        start.wait();
+                        image.rows(&RowPixels {
+                            rows,
+                            color: &f.color[px],
+                            depth: &[],
+                            normal: &[],
+                        });
+                    });
+                }
+            });
+            let Some(Content::Bytes(got)) = image.into_content() else {
+                panic!("round {round} (bands in the order {order:?}): rows left uncompressed");
+            };
+            assert!(got == want, "round {round}");
         }
     }
 
@@ -386,7 +544,7 @@ mod tests {
         let image = StreamedImage::chunked(&path, ImageKind::Color, 9, 30, 100).unwrap();
         feed(&image, &f, &mut rng, Some(0), true);
         assert!(!image.complete());
-        assert!(image.into_file().is_none());
+        assert!(image.into_content().is_none());
         // a depth image given rows without depths
         let image = StreamedImage::chunked(
             &path,
@@ -400,11 +558,30 @@ mod tests {
         )
         .unwrap();
         feed(&image, &f, &mut rng, None, false);
-        assert!(image.into_file().is_none());
+        assert!(image.into_content().is_none());
         // a colour image needs no depths
         let image = StreamedImage::chunked(&path, ImageKind::Color, 9, 30, 100).unwrap();
         feed(&image, &f, &mut rng, None, false);
-        assert!(image.into_file().is_some());
+        assert!(image.into_content().is_some());
+        // a PNG missing one band (of shuffled bands: it may be the rows others wait for), or
+        // given a row twice
+        let png = dir.join("img.png");
+        for skip in [0, 2] {
+            let image = StreamedImage::create(&png, ImageKind::Color, 9, 30).unwrap();
+            feed(&image, &f, &mut rng, Some(skip), false);
+            assert!(!image.complete(), "band {skip} missing");
+            assert!(image.into_content().is_none());
+        }
+        let image = StreamedImage::create(&png, ImageKind::Color, 9, 30).unwrap();
+        feed(&image, &f, &mut rng, None, false);
+        assert!(image.complete());
+        image.rows(&RowPixels {
+            rows: 0..1,
+            color: &f.color[..9],
+            depth: &[],
+            normal: &[],
+        });
+        assert!(image.into_content().is_none(), "row 0 twice");
     }
 
     #[test]
@@ -418,7 +595,9 @@ mod tests {
         std::fs::write(super::super::temp_path(&path), vec![7u8; 1000]).unwrap();
         let image = StreamedImage::chunked(&path, ImageKind::Color, 6, 10, 40).unwrap();
         feed(&image, &f, &mut rng, None, true);
-        let file = image.into_file().unwrap();
+        let Some(Content::Written(file)) = image.into_content() else {
+            panic!("a TGA written whole is an unnamed file");
+        };
         write_atomic_files(&[(&path, Source::Written(&file))], "write image").unwrap();
         let want =
             encode_rgb8(6, 10, &frame_image(&f, ImageKind::Color).data, Format::Tga).unwrap();
@@ -439,15 +618,17 @@ mod tests {
     }
 
     #[test]
-    fn png_and_the_float_formats_are_not_written_while_rendering() {
+    fn the_float_formats_are_not_written_while_rendering_and_a_png_makes_no_file_before() {
         let dir = folder("formats");
-        for ext in ["png", "exr", "pfm", "hdr"] {
+        for ext in ["exr", "pfm", "hdr"] {
             let path = dir.join(format!("img.{ext}"));
             assert!(
                 StreamedImage::create(&path, ImageKind::Color, 4, 4).is_none(),
                 "{ext}"
             );
         }
+        let png = StreamedImage::create(&dir.join("img.png"), ImageKind::Color, 4, 4);
+        assert!(png.is_some());
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     }
 }
