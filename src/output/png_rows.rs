@@ -1,7 +1,7 @@
 //! The one PNG encoder of every 8-bit PNG `whitted` writes: [`PngRows`] takes an image's rows
 //! top to bottom, in any number of calls, and gives the file's bytes. Each row is filtered
-//! (adaptive: the filter whose bytes sum smallest) and compressed (`fdeflate`, the `png`
-//! crate's fast setting) as it comes, so the streamed images of `streamed.rs` compress a PNG
+//! (adaptive: the filter the `png` crate's heuristic picks for the row) and compressed
+//! (`fdeflate`, the crate's fast setting) as it comes, so the streamed images of `streamed.rs` compress a PNG
 //! band by band while the render runs, and [`encode_png`] (a whole image at once) gives the
 //! same bytes: they depend on the rows alone, not on how they were handed over.
 //!
