@@ -3,6 +3,7 @@
 
     benches/frames.py WHITTED ROUNDS [frames|ceiling|phases]
     benches/frames.py WHITTED ROUNDS compare OTHER
+    benches/frames.py WHITTED ROUNDS runs N
 
 WHITTED is a `whitted` binary (build it with `cargo build --release`). Two frames: the
 showcase (`scenes/showcase.txt`, 1280x960, shadows, transparent shadows, 8 bounces) and the
@@ -19,6 +20,10 @@ write_ms` of `--stats`. ONLY=showcase or ONLY=bunny runs one of them.
 - `compare OTHER`: two binaries on the same frames, each round running both at 1 thread and
   then at 2 (which goes first alternates by round); prints each one's median and best and the
   median of the rounds' differences OTHER - WHITTED, with how often OTHER was faster.
+- `runs N`: N runs of `frames`, each followed by a `ceiling` of 10 rounds, as PERF.md's sittings
+  measure (one run says little on a machine whose speed moves from minute to minute); prints
+  each run, then per frame the lowest / median / highest of the runs on each statistic and
+  how many met the target of issue 9 (1.9x), and the ceilings' range.
 
 Nothing else should run meanwhile: on 2 cores, another job shows up as a lower ratio.
 """
@@ -101,17 +106,16 @@ def compare(first, other, rounds, names):
                   f"B faster in {sum(x < 0 for x in d)} of {rounds}")
 
 
-def main():
-    if len(sys.argv) < 3:
-        sys.exit(__doc__)
-    whitted, rounds = os.path.abspath(sys.argv[1]), int(sys.argv[2])
-    mode = sys.argv[3] if len(sys.argv) > 3 else "frames"
-    names = [os.environ["ONLY"]] if "ONLY" in os.environ else ["showcase", "bunny"]
-    if mode == "phases":
-        names = ["bunny"]
-    if mode == "compare":
-        compare(whitted, os.path.abspath(sys.argv[4]), rounds, names)
-        return
+# Issue 9's target for the frames' 2-thread ratio.
+TARGET = 1.9
+
+# Rounds of the ceiling that follows each run of `runs N`.
+CEILING_ROUNDS = 10
+
+
+def measure(whitted, rounds, names, mode):
+    """`rounds` rounds of `mode` (frames, ceiling or phases): the times per frame and thread
+    count (for `ceiling`, 1 is alone and 2 the slower of the pair), and the start and end."""
     runs = {n: {1: [], 2: []} for n in names}
     start = time.strftime("%H:%M:%S", time.gmtime())
     for _ in range(rounds):
@@ -123,13 +127,31 @@ def main():
                 for t in (1, 2):
                     runs[n][t].append(run(whitted, n, t))
     end = time.strftime("%H:%M:%S", time.gmtime())
+    return runs, start, end
+
+
+def ceiling_of(one, two):
+    """The ceiling from the times alone and the slower of each pair."""
+    return 2 * statistics.median(one) / statistics.median(two)
+
+
+def ratios(one, two):
+    """A `frames` run's three statistics: ratio of the medians, best against best, median of
+    the rounds' own ratios."""
+    a, b = [r["frame_ms"] for r in one], [r["frame_ms"] for r in two]
+    med = statistics.median
+    return med(a) / med(b), min(a) / min(b), med(x / y for x, y in zip(a, b))
+
+
+def report(mode, rounds, names, runs, start, end):
+    """Prints a run of `mode` as the single-run modes do."""
     print(f"{mode}, {rounds} rounds, {start}-{end} UTC")
     med = statistics.median
     for n in names:
         one, two = runs[n][1], runs[n][2]
         if mode == "ceiling":
             print(f"  {n:9s} alone {med(one):8.1f} ms, the slower of two at once "
-                  f"{med(two):8.1f} ms: ceiling {2 * med(one) / med(two):.3f}x")
+                  f"{med(two):8.1f} ms: ceiling {ceiling_of(one, two):.3f}x")
         elif mode == "phases":
             for k in ("parse_ms", "bvh_build_ms", "rest_ms", "bounce0_cpu_ms", "write_ms",
                       "frame_ms"):
@@ -138,10 +160,61 @@ def main():
                       f"lost against half: {b - a / 2:6.2f} ms")
         else:
             a, b = [r["frame_ms"] for r in one], [r["frame_ms"] for r in two]
+            medians, best, own = ratios(one, two)
             print(f"  {n:9s} 1 thread {med(a):8.1f}  2 threads {med(b):8.1f} ms: "
-                  f"{med(a) / med(b):.3f}x; best against best {min(a):.1f} / {min(b):.1f} "
-                  f"= {min(a) / min(b):.3f}x; median of the rounds' ratios "
-                  f"{med(x / y for x, y in zip(a, b)):.3f}x")
+                  f"{medians:.3f}x; best against best {min(a):.1f} / {min(b):.1f} "
+                  f"= {best:.3f}x; median of the rounds' ratios {own:.3f}x")
+
+
+def many_runs(whitted, rounds, names, count):
+    """`runs N` mode (see the module docs)."""
+    found = {n: [] for n in names}
+    ceilings = {n: [] for n in names}
+    first = time.strftime("%H:%M:%S", time.gmtime())
+    for _ in range(count):
+        runs, start, end = measure(whitted, rounds, names, "frames")
+        report("frames", rounds, names, runs, start, end)
+        for n in names:
+            found[n].append(ratios(runs[n][1], runs[n][2]))
+        runs, start, end = measure(whitted, CEILING_ROUNDS, names, "ceiling")
+        report("ceiling", CEILING_ROUNDS, names, runs, start, end)
+        for n in names:
+            ceilings[n].append(ceiling_of(runs[n][1], runs[n][2]))
+        sys.stdout.flush()
+    last = time.strftime("%H:%M:%S", time.gmtime())
+    print(f"{count} runs of {rounds} rounds, {first}-{last} UTC: lowest / median / highest "
+          f"of the runs, and how many met {TARGET}x")
+    for n in names:
+        cells = []
+        for what, i in (("medians", 0), ("rounds' ratios", 2), ("best against best", 1)):
+            xs = sorted(r[i] for r in found[n])
+            met = sum(x >= TARGET for x in xs)
+            cells.append(f"{what} {xs[0]:.3f} / {statistics.median(xs):.3f} / {xs[-1]:.3f} "
+                         f"({met} of {count})")
+        c = ceilings[n]
+        print(f"  {n:9s} " + "; ".join(cells) + f"; ceilings {min(c):.3f}-{max(c):.3f}x")
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    whitted, rounds = os.path.abspath(sys.argv[1]), int(sys.argv[2])
+    mode = sys.argv[3] if len(sys.argv) > 3 else "frames"
+    names = [os.environ["ONLY"]] if "ONLY" in os.environ else ["showcase", "bunny"]
+    if mode == "phases":
+        names = ["bunny"]
+    if mode == "compare":
+        compare(whitted, os.path.abspath(sys.argv[4]), rounds, names)
+        return
+    if mode == "runs":
+        if len(sys.argv) < 5:
+            sys.exit(__doc__)
+        many_runs(whitted, rounds, names, int(sys.argv[4]))
+        return
+    if mode not in ("frames", "ceiling", "phases"):
+        sys.exit(__doc__)
+    runs, start, end = measure(whitted, rounds, names, mode)
+    report(mode, rounds, names, runs, start, end)
 
 
 main()
