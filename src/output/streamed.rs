@@ -166,8 +166,8 @@ impl StreamedImage {
         let mut rgb = vec![0u8; n * w * 3];
         kind_to_bytes(self.kind, pixels, 0, &mut rgb);
         let written = match &self.how {
-            How::InPlace(img) => img.rows(px.rows.clone(), &rgb, self),
-            How::Compressed(img) => img.rows(px.rows.start, rgb, self),
+            How::InPlace(img) => img.rows(px.rows.clone(), &rgb, w * 3, self.height),
+            How::Compressed(img) => img.rows(px.rows.start, rgb, w * 3),
         };
         if !written {
             self.failed.store(true, Ordering::Relaxed);
@@ -203,14 +203,14 @@ impl StreamedImage {
 }
 
 impl InPlace {
-    /// Stores the image rows `rows` (their RGB bytes `rgb`) in their chunks and writes the
-    /// chunks they complete; false if a write failed.
-    fn rows(&self, rows: Range<u32>, rgb: &[u8], image: &StreamedImage) -> bool {
-        let row = image.width as usize * 3;
+    /// Stores the image rows `rows` (their RGB bytes `rgb`, `row` bytes each, of an image
+    /// `height` rows high) in their chunks and writes the chunks they complete; false if a
+    /// write failed.
+    fn rows(&self, rows: Range<u32>, rgb: &[u8], row: usize, height: u32) -> bool {
         let mut y = rows.start;
         while y < rows.end {
             let c = y / self.chunk_rows;
-            let chunk_rows = self.chunk_range(c, image.height);
+            let chunk_rows = self.chunk_range(c, height);
             let end = chunk_rows.end.min(rows.end);
             let mut chunk = self.chunks[c as usize]
                 .lock()
@@ -219,9 +219,9 @@ impl InPlace {
                 chunk.stored = vec![0u8; chunk_rows.len() * row];
             }
             // The chunk's rows are consecutive in the file, in one order or the other.
-            let first = self.first_stored(chunk_rows.clone(), image.height);
+            let first = self.first_stored(chunk_rows.clone(), height);
             for y in y..end {
-                let at = (stored_row(self.format, image.height, y) - first) as usize * row;
+                let at = (stored_row(self.format, height, y) - first) as usize * row;
                 let src = (y - rows.start) as usize * row;
                 store_row(
                     self.format,
@@ -257,18 +257,17 @@ impl InPlace {
 }
 
 impl Compressed {
-    /// Puts the rows from `first` on (their RGB bytes `rgb`) in waiting, then compresses every
-    /// row that can go, unless another thread is compressing: that one then takes them too, as
-    /// it looks again after letting the encoder go. False if the rows came before (a fault) or
-    /// the encoder failed.
-    fn rows(&self, first: u32, rgb: Vec<u8>, image: &StreamedImage) -> bool {
+    /// Puts the rows from `first` on (their RGB bytes `rgb`, `row` bytes each) in waiting, then
+    /// compresses every row that can go, unless another thread is compressing: that one then
+    /// takes them too, as it looks again after letting the encoder go. False if the rows came
+    /// before (a fault) or the encoder failed.
+    fn rows(&self, first: u32, rgb: Vec<u8>, row: usize) -> bool {
         {
             let mut waiting = self.waiting.lock().unwrap_or_else(PoisonError::into_inner);
             if first < self.next.load(Ordering::Acquire) || waiting.insert(first, rgb).is_some() {
                 return false;
             }
         }
-        let row = image.width as usize * 3;
         loop {
             let Ok(mut encoder) = self.encoder.try_lock() else {
                 // Held (its holder looks again after letting it go), or poisoned: then
