@@ -443,6 +443,13 @@ pub fn lanes_i32(a: I32x8) -> [i32; LANES] {
     a.to_array()
 }
 
+/// Rows to columns: lane `j` of column `i` is lane `i` of row `j` (eight unpacks, eight
+/// shuffles and eight permutations).
+#[inline(always)]
+pub fn transpose8x8(rows: [F32x8; 8]) -> [F32x8; 8] {
+    F32x8::transpose(rows)
+}
+
 /// 3-vectors stored as one SIMD value per coordinate (structure of arrays): lane `i` of `x`,
 /// `y`, `z` is vector `i`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -626,6 +633,19 @@ impl<T: Simd> Neg for Vec3v<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lane `j` of column `i` is lane `i` of row `j`, for every `i` and `j`.
+    #[test]
+    fn transpose8x8_turns_rows_into_columns() {
+        let rows: [F32x8; 8] =
+            std::array::from_fn(|j| F32x8::new(std::array::from_fn(|i| (10 * j + i) as f32)));
+        let columns = transpose8x8(rows);
+        for (i, c) in columns.iter().enumerate() {
+            for (j, v) in lanes(*c).iter().enumerate() {
+                assert_eq!(*v, (10 * j + i) as f32, "column {i}, lane {j}");
+            }
+        }
+    }
 
     #[test]
     fn unit_to_bytes_truncates_each_lane_as_a_saturating_cast_does() {

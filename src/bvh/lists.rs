@@ -1,6 +1,6 @@
 //! Breadth-first ray lists (Barringer and Akenine-Möller 2014, dynamic ray stream traversal):
 //! many incoherent rays go down the 8-wide BVH together as a list of ray ids. A node tests each
-//! ray of its list against its 8 children (one 8-lane pass per ray, [`Ray1x8::test_lane`]) and
+//! ray of its list against its 8 children (one 8-lane pass per ray, [`ListRay::test`]) and
 //! splits the list into one list per child the rays enter; a leaf hands its list to the caller's
 //! leaf test, which lowers the rays' `tmax`. A node or leaf is then fetched once for all the rays
 //! that reach it together, where single-ray walks fetch it once per ray, and the rays' tests at
@@ -13,11 +13,11 @@
 //! `geometry::query` decides which rays take this path.
 //!
 //! ```text
-//! packets prepared (Ray1x8), ray id = packet * 8 + lane, tmax per id
+//! rays prepared (ListRay, one cache line each), ray id = index, tmax per id
 //!   --> root: every id --> node: one list per entered child --> ... --> leaf(leaf, ids, tmax)
 //! ```
 
-use super::{Bvh8, Leaf, NodeRef, Ray1x8, WIDTH};
+use super::{Bvh8, Leaf, ListRay, NodeRef, WIDTH};
 use crate::simd::{F32x8, LANES, bitmask, compact_lanes, min, select};
 
 /// Buffers of [`Bvh8::closest_lists`], kept by the caller from one call to the next so that a
@@ -36,10 +36,10 @@ pub struct ListScratch {
 
 impl Bvh8 {
     /// The closest hits of forward rays (`tmin >= 0`), traced together by breadth-first lists:
-    /// ray `id` is lane `id % 8` of the packet `rays[id / 8]` (prepared by [`Ray1x8::new`]);
-    /// `ids` names the rays to trace, and `tmax[id]` bounds each one's hit. `leaf(leaf, ids,
-    /// tmax)` tests a leaf's primitives for the rays it lists and lowers their `tmax` where it
-    /// finds nearer hits; every ray reaches every leaf it may hit nearer than its `tmax`.
+    /// ray `id` is `rays[id]` (made by [`super::Ray1x8::list_rays`]); `ids` names the rays to
+    /// trace, and `tmax[id]` bounds each one's hit. `leaf(leaf, ids, tmax)` tests a leaf's
+    /// primitives for the rays it lists and lowers their `tmax` where it finds nearer hits;
+    /// every ray reaches every leaf it may hit nearer than its `tmax`.
     /// `touch(leaf)` starts fetching a leaf handed a list (the lists handed down are visited
     /// after their siblings' subtrees, so every entered child is fetched while those run).
     ///
@@ -48,7 +48,7 @@ impl Bvh8 {
     /// If an id names a ray outside `rays` or `tmax`.
     pub fn closest_lists(
         &self,
-        rays: &[Ray1x8],
+        rays: &[ListRay],
         ids: &[u32],
         tmax: &mut [f32],
         s: &mut ListScratch,
@@ -79,7 +79,7 @@ impl Bvh8 {
             let mut nearest = inf;
             let entered = s.test_list(list.clone(), |id| {
                 let id = id as usize;
-                let (m, near) = rays[id / LANES].test_lane(id % LANES, n, 0.0, tmax[id]);
+                let (m, near) = rays[id].test(n, 0.0, tmax[id]);
                 nearest = min(nearest, select(m, near, inf));
                 bitmask(m)
             });

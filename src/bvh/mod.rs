@@ -33,7 +33,7 @@ mod stream;
 
 pub use lists::ListScratch;
 pub use packet::PACKET_STACK_DEPTH;
-pub use single::{Entered, Ray1x8};
+pub use single::{Entered, ListRay, Ray1x8};
 pub use stream::{MAX_STREAM, StreamMasks};
 
 use crate::math::Vec3;

@@ -4,17 +4,17 @@
 //! [`Ray1x8`] prepares a packet's 8 rays for their walks at once, and also tests one child
 //! against all 8 lanes by the same arithmetic, each lane in its own octant (the packet walk's
 //! test for incoherent packets, `packet.rs`), or a whole node: the root, whose test is the
-//! first step of every lane's walk ([`Entered`]), or one lane against a whole node where it lies
-//! in the packet (the breadth-first lists' test, `lists.rs`).
+//! first step of every lane's walk ([`Entered`]). It also hands its lanes out as [`ListRay`]s,
+//! one cache line a ray, which the breadth-first lists (`lists.rs`) test against whole nodes.
 
 use super::stack::Stack;
 use super::{
     Bvh8, HI, LO, Leaf, MAX_DEPTH, Node8, NodeRef, Plane, ROBUST, WIDTH, safe_inverse,
     safe_inverse8, slab_octant, widen,
 };
-use crate::math::Ray;
+use crate::math::{Ray, Vec3};
 use crate::packet::RayPacket;
-use crate::simd::{F32x8, Mask, bitmask, fused_mul_add, ge, lt, select};
+use crate::simd::{F32x8, Mask, bitmask, fused_mul_add, ge, lanes, lt, select, transpose8x8};
 use glam::Vec3A;
 
 /// Entries a single-ray stack may hold: each level pushes at most `WIDTH - 1` children more
@@ -290,41 +290,23 @@ impl Ray1x8 {
         }
     }
 
-    /// The children of `n` lane `l` enters within `(tmin, tmax)` (as a mask, lane `i` = child
-    /// `i`) and its entry distances: lane `l`'s [`Ray1::test`] (the same bits), its values read
-    /// where they lie in the packet and its planes picked by its octant at each call. The test
-    /// of the breadth-first lists (`lists.rs`), which take each ray once per node it visits, in
-    /// any order, so prepare no ray for a walk of its own.
+    /// Appends the 8 lanes of `rays`, the packet this was prepared from, to `out` as
+    /// [`ListRay`]s, lane `l` at `out[len + l]` (active or not): two 8x8 transposes of the
+    /// lanes' values, one record of 16 each.
     #[inline(always)]
-    pub(super) fn test_lane(
-        &self,
-        l: usize,
-        n: &Node8,
-        tmin: f32,
-        tmax: f32,
-    ) -> (crate::simd::Mask, F32x8) {
-        let lane = |v: &[F32x8; 3], a: usize| F32x8::splat(v[a].as_array()[l]);
-        // the entry plane of axis `a` is its upper one where the lane's direction is negative
-        let down = |a: usize| (self.down[a] >> l & 1) as usize;
-        let entry = |_: Plane, a: usize| {
-            let plane = n.bounds[LO + a + (HI - LO) * down(a)];
-            fused_mul_add(plane, lane(&self.inv, a), lane(&self.neg_oi_near, a))
-        };
-        let exit = |_: Plane, a: usize| {
-            let plane = n.bounds[HI + a - (HI - LO) * down(a)];
-            fused_mul_add(plane, lane(&self.inv_exit, a), lane(&self.neg_oi_far, a))
-        };
-        // the planes are the lane's own (the closures ignore the octant's)
-        let any_octant = Plane::ENTRY_OF_OCTANT[0];
-        let tmax = F32x8::splat(tmax) * F32x8::splat(ROBUST);
-        slab_octant::<true, true>(
-            entry,
-            exit,
-            &any_octant,
-            &any_octant,
-            F32x8::splat(tmin),
-            tmax,
-        )
+    pub fn list_rays(&self, rays: &RayPacket, out: &mut Vec<ListRay>) {
+        let [ix, iy, iz] = self.inv;
+        let [nx, ny, nz] = self.neg_oi_near;
+        let [fx, fy, fz] = self.neg_oi_far;
+        let (o, d) = (rays.origin, rays.dir);
+        let first = transpose8x8([ix, iy, iz, nx, ny, nz, fx, fy]);
+        let second = transpose8x8([fz, o.x, o.y, o.z, d.x, d.y, d.z, rays.tmin]);
+        out.extend(first.iter().zip(&second).map(|(a, b)| {
+            let mut values = [0.0; 16];
+            values[..8].copy_from_slice(&lanes(*a));
+            values[8..].copy_from_slice(&lanes(*b));
+            ListRay { values }
+        }));
     }
 
     /// Lane `l` as a forward ray for [`Ray1::test`].
@@ -341,6 +323,76 @@ impl Ray1x8 {
             near: Plane::ENTRY_OF_OCTANT[octant],
             far: Plane::ENTRY_OF_OCTANT[octant ^ 7],
         }
+    }
+}
+
+/// One forward ray of the breadth-first lists (`lists.rs`), in one cache line: what its node
+/// test reads (its lane of [`Ray1x8`]: reciprocal direction and the directed offsets of the
+/// entry and exit planes) and the ray itself for the leaf test. The rays of a list lie anywhere
+/// in a batch of 32,768, each read again at every node it reaches: read where they lie in their
+/// `Ray1x8`, one lane's values spread over seven cache lines (PERF.md, sitting 56).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct ListRay {
+    /// Reciprocal direction (`INV`), negated rounded offsets of the entry (`NEAR`) and exit
+    /// (`FAR`) planes, origin, direction and `tmin`: [`Ray1x8::list_rays`]'s two transposes.
+    values: [f32; 16],
+}
+
+impl ListRay {
+    const INV: usize = 0;
+    const NEAR: usize = 3;
+    const FAR: usize = 6;
+    const ORIGIN: usize = 9;
+    const DIR: usize = 12;
+    const TMIN: usize = 15;
+
+    /// The children of `n` this ray enters within `(tmin, tmax)` (as a mask, lane `i` = child
+    /// `i`) and its entry distances: [`Ray1::test`] of the ray (the same bits), its planes
+    /// picked by its octant at each call.
+    #[inline(always)]
+    pub(super) fn test(&self, n: &Node8, tmin: f32, tmax: f32) -> (Mask, F32x8) {
+        let v = |k: usize| F32x8::splat(self.values[k]);
+        // the entry plane of axis `a` is its upper one where the direction is negative: the
+        // reciprocal's sign, as `Ray1x8::from_inverse` takes it (`lt(inv, 0)`)
+        let down = |a: usize| (self.values[Self::INV + a] < 0.0) as usize;
+        let entry = |_: Plane, a: usize| {
+            let plane = n.bounds[LO + a + (HI - LO) * down(a)];
+            fused_mul_add(plane, v(Self::INV + a), v(Self::NEAR + a))
+        };
+        // `inv * ROBUST` as `Ray1x8::from_inverse` computes it (the same bits)
+        let exit = |_: Plane, a: usize| {
+            let plane = n.bounds[HI + a - (HI - LO) * down(a)];
+            fused_mul_add(
+                plane,
+                v(Self::INV + a) * F32x8::splat(ROBUST),
+                v(Self::FAR + a),
+            )
+        };
+        // the planes are the ray's own (the closures ignore the octant's)
+        let any_octant = Plane::ENTRY_OF_OCTANT[0];
+        let tmax = F32x8::splat(tmax) * F32x8::splat(ROBUST);
+        slab_octant::<true, true>(
+            entry,
+            exit,
+            &any_octant,
+            &any_octant,
+            F32x8::splat(tmin),
+            tmax,
+        )
+    }
+
+    /// The ray.
+    #[inline(always)]
+    pub fn ray(&self) -> Ray {
+        let v = |k: usize| Vec3::new(self.values[k], self.values[k + 1], self.values[k + 2]);
+        Ray::new(v(Self::ORIGIN), v(Self::DIR))
+    }
+
+    /// Where the ray starts (`tmin >= 0`).
+    #[inline(always)]
+    pub fn tmin(&self) -> f32 {
+        self.values[Self::TMIN]
     }
 }
 
@@ -807,11 +859,20 @@ mod tests {
                 }
                 Ray::new(o, Vec3::from_array(d).normalize_or(Vec3::X))
             });
-            let packet = RayPacket::from_rays(&rays, 0.0);
+            let mut packet = RayPacket::from_rays(&rays, 0.0);
             let tmin: [f32; 8] =
                 std::array::from_fn(|_| [0.0, 1e-3, 0.5][rng.range64(0.0, 2.99) as usize]);
+            packet.tmin = F32x8::new(tmin);
             let tmax: [f32; 8] = std::array::from_fn(|_| rng.range64(0.5, 20.0) as f32);
             let prepared = Ray1x8::new(&packet);
+            let mut list = Vec::new();
+            prepared.list_rays(&packet, &mut list);
+            assert_eq!(list.len(), 8);
+            for (l, ray) in rays.iter().enumerate() {
+                let r = list[l].ray();
+                assert_eq!((r.origin, r.dir), (ray.origin, ray.dir), "case {case}");
+                assert_eq!(list[l].tmin().to_bits(), tmin[l].to_bits());
+            }
             let (t0, t1) = (F32x8::new(tmin), F32x8::new(tmax));
             let node = prepared.test_node(&n, t0, t1);
             for i in 0..WIDTH {
@@ -825,8 +886,8 @@ mod tests {
                         "case {case}, child {i}, lane {l}"
                     );
                     assert_eq!(near.to_array()[l].to_bits(), n1.to_array()[i].to_bits());
-                    // one lane read in place (the breadth-first lists' test)
-                    let (m2, n2) = prepared.test_lane(l, &n, tmin[l], tmax[l]);
+                    // the lane as a record (the breadth-first lists' test)
+                    let (m2, n2) = list[l].test(&n, tmin[l], tmax[l]);
                     assert_eq!(crate::simd::bitmask(m2), m1, "case {case}");
                     assert_eq!(n2.to_array()[i].to_bits(), n1.to_array()[i].to_bits());
                     // the whole node at once: lane l's byte and its row of distances
@@ -877,14 +938,17 @@ mod tests {
                     dir: Vec3::from_array(d),
                 }
             });
-            let prepared = Ray1x8::new(&RayPacket::from_rays(&rays, 0.0));
+            let packet = RayPacket::from_rays(&rays, 0.0);
+            let prepared = Ray1x8::new(&packet);
+            let mut list = Vec::new();
+            prepared.list_rays(&packet, &mut list);
             let (t0, t1) = (F32x8::splat(0.0), F32x8::splat(f32::INFINITY));
             for i in children..WIDTH {
                 let (mask, _) = prepared.test_child(&n, i, t0, t1);
                 assert_eq!(crate::simd::bitmask(mask), 0, "case {case}, slot {i}");
             }
-            for l in 0..8 {
-                let (mask, _) = prepared.test_lane(l, &n, 0.0, f32::INFINITY);
+            for (l, ray) in list.iter().enumerate() {
+                let (mask, _) = ray.test(&n, 0.0, f32::INFINITY);
                 assert_eq!(
                     crate::simd::bitmask(mask) >> children,
                     0,

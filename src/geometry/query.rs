@@ -12,7 +12,7 @@
 
 use super::blocks::{Best, nearer_root, take_packet};
 use super::{Geometry, PrimKind};
-use crate::bvh::{Entered, ListScratch, MAX_STREAM, Ray1x8};
+use crate::bvh::{Entered, ListRay, ListScratch, MAX_STREAM, Ray1x8};
 use crate::intersect::sphere::affine_packet;
 use crate::intersect::sphere::sphere_lanes;
 use crate::intersect::{
@@ -64,9 +64,9 @@ pub struct ListBatch {
     rays: Vec<RayPacket>,
     hits: Vec<HitPacket>,
     at: Vec<usize>,
-    /// Those of them the lists trace (forward rays), prepared; ray `id` of the lists is lane
-    /// `id % 8` of `prepared[id / 8]`, which is the waiting packet `packet[id / 8]`.
-    prepared: Vec<Ray1x8>,
+    /// Those of them the lists trace (forward rays), prepared; ray `id` of the lists is
+    /// `prepared[id]`, lane `id % 8` of the waiting packet `packet[id / 8]`.
+    prepared: Vec<ListRay>,
     packet: Vec<usize>,
     /// Each prepared lane's hit so far (by id), active or not.
     t: Vec<f32>,
@@ -425,8 +425,8 @@ impl Geometry {
                 self.closest_hit_singles(std::slice::from_ref(r), std::slice::from_mut(h));
                 continue;
             }
-            let first = (prepared.len() * LANES) as u32;
-            prepared.push(Ray1x8::new(r));
+            let first = prepared.len() as u32;
+            Ray1x8::new(r).list_rays(r, prepared);
             packet.push(p);
             t.extend_from_slice(&lanes(h.t));
             prim.extend_from_slice(&crate::simd::lanes_i32(h.prim));
@@ -446,14 +446,13 @@ impl Geometry {
             scratch,
             |leaf, ids, tmax| {
                 for &id in ids {
-                    let (id, l) = (id as usize, id as usize % LANES);
-                    let r = &rays[packet[id / LANES]];
-                    let tmin = r.tmin.as_array()[l];
+                    let id = id as usize;
+                    let r = &prepared[id];
                     let mut best = Best {
                         t: tmax[id],
                         prim: prim[id],
                     };
-                    self.closest_leaf::<false>(leaf, &r.ray(l), tmin, &mut best);
+                    self.closest_leaf::<false>(leaf, &r.ray(), r.tmin(), &mut best);
                     (tmax[id], prim[id]) = (best.t, best.prim);
                 }
             },
