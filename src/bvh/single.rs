@@ -842,9 +842,15 @@ mod tests {
     fn a_packet_child_test_is_each_lanes_single_ray_test() {
         let mut rng = Rng(0x51ed_2701);
         for case in 0..500 {
-            let boxes: [Aabb; WIDTH] = std::array::from_fn(|_| {
-                let a = Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
-                let b = Vec3::from_array(std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32));
+            let boxes: [Aabb; WIDTH] = std::array::from_fn(|k| {
+                let a: [f32; 3] = std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32);
+                let mut b: [f32; 3] = std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32);
+                // in every other case, boxes of no thickness on one axis (an axis-aligned
+                // triangle's): a ray crossing one enters and leaves it there at one distance
+                if case % 2 == 1 {
+                    b[k % 3] = a[k % 3];
+                }
+                let (a, b) = (Vec3::from_array(a), Vec3::from_array(b));
                 Aabb {
                     min: a.min(b),
                     max: a.max(b),
