@@ -4,7 +4,8 @@
 //! sizes, both tracers); a uniform-sampled, box-filtered flat-coloured scene equals its
 //! 1-sample image; a pixel whose weights are all zero is black; the depth and normal images
 //! show the sample nearest the pixel centre; a band's samples lie where the sampler puts each
-//! pixel's own.
+//! pixel's own; column pieces of a band join into the band's block, and on several threads the
+//! last band of each thread comes in such pieces without changing a pixel.
 
 mod common;
 
@@ -263,5 +264,111 @@ fn depth_and_normals_show_the_sample_nearest_the_centre() {
         let colour_only = whitted::render(&scene, &lean).unwrap();
         assert!(colour_only.depth.is_empty() && colour_only.normal.is_empty());
         assert_eq!(colour_only.color, frame.color);
+    }
+}
+
+/// A deterministic colour for each sample, from its pixel, index and offset; depths and
+/// normals from the pixel (what a tracer's closure would fill, without tracing).
+fn fill_block(b: &mut whitted::film::SampleBlock) {
+    let spp = b.spp as usize;
+    for slot in 0..b.len() {
+        let (x, y) = b.pixel_of(slot);
+        let o = b.offsets[slot];
+        b.color[slot] = Vec3::new(x as f32 + o.x, y as f32 + o.y, (slot % spp) as f32);
+    }
+    for p in 0..b.depth.len() {
+        let (x, y) = b.pixel_of(p * spp);
+        b.depth[p] = (x * 1000 + y) as f32;
+        b.normal[p] = Vec3::new(1.0, x as f32, y as f32);
+    }
+}
+
+#[test]
+fn column_pieces_join_into_the_block_of_their_band() {
+    use whitted::film::SampleBlock;
+    for (pattern, count, depth_normal) in [
+        (Pattern::Uniform, 1, false),
+        (Pattern::Jittered, 4, true),
+        (Pattern::Random, 3, true),
+    ] {
+        let s = sampler(pattern, count);
+        let block = |x0: u32, width: u32| {
+            let mut b = SampleBlock::new(x0, 16, width, 8, 64, 48, &s, depth_normal);
+            fill_block(&mut b);
+            b
+        };
+        let whole = block(5, 30);
+        // Columns 5..17, 17..29, 29..33 and 33..35, handed over out of order.
+        let pieces = vec![block(29, 4), block(5, 12), block(33, 2), block(17, 12)];
+        assert_eq!(
+            SampleBlock::join_columns(pieces),
+            whole,
+            "{pattern:?} x{count}"
+        );
+        assert_eq!(SampleBlock::join_columns(vec![whole.clone()]), whole);
+    }
+}
+
+#[test]
+fn the_last_band_of_each_thread_comes_in_column_pieces_and_no_pixel_changes() {
+    use std::sync::Mutex;
+    use whitted::film::{BAND_ROWS, FilmSpec, TAIL_PIECES, render_film};
+    let opts = RenderOptions {
+        width: 45,
+        height: 37,
+        sampler: sampler(Pattern::Jittered, 4),
+        filter: filter(Shape::Gaussian, 2.3),
+        depth_normal: true,
+        keep_samples: true,
+        ..RenderOptions::default()
+    };
+    let spec = FilmSpec::for_options(&opts);
+    let bands = 37u32.div_ceil(BAND_ROWS);
+    let render = |threads: usize| {
+        let blocks = Mutex::new(Vec::new());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (out, results) = pool
+            .install(|| {
+                render_film(
+                    &spec,
+                    &|_| {},
+                    || (),
+                    |_, b| {
+                        fill_block(b);
+                        blocks.lock().unwrap().push((b.y0, b.x0, b.width));
+                        Ok((b.y0, b.x0, b.width))
+                    },
+                )
+            })
+            .unwrap();
+        let mut blocks = blocks.into_inner().unwrap();
+        blocks.sort();
+        // What the trace returned, one for each block, bands in order, pieces left to right.
+        assert_eq!(results, blocks, "{threads} threads");
+        (out, blocks)
+    };
+    let (one, blocks) = render(1);
+    let whole: Vec<_> = (0..bands).map(|k| (k * BAND_ROWS, 0, 45)).collect();
+    assert_eq!(blocks, whole, "one thread: every band whole");
+    for threads in [2, 3, 8] {
+        let (out, blocks) = render(threads);
+        assert!(
+            out == one,
+            "{threads} threads: the output differs from 1 thread's"
+        );
+        // The last `threads` bands (all of them when fewer) in pieces of 12 columns, the
+        // last piece what is left; the others whole.
+        let split = bands.saturating_sub(threads as u32);
+        let mut want: Vec<_> = whole[..split as usize].to_vec();
+        for k in split..bands {
+            for x0 in [0, 12, 24, 36] {
+                want.push((k * BAND_ROWS, x0, if x0 == 36 { 9 } else { 12 }));
+            }
+        }
+        assert_eq!(TAIL_PIECES, 4);
+        assert_eq!(blocks, want, "{threads} threads");
     }
 }

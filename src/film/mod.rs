@@ -20,7 +20,7 @@
 
 mod stream;
 
-pub use stream::{BAND_ROWS, FilmOutput, render_film};
+pub use stream::{BAND_ROWS, FilmOutput, TAIL_PIECES, render_film};
 
 use std::ops::Range;
 
@@ -75,7 +75,9 @@ impl FilmSpec {
     /// radius, cropped at the image border, and its rows rounded out to whole bands of
     /// [`BAND_ROWS`] rows of the image. A band is then traced exactly as the whole image's render
     /// traces it (the packet tracer's packets depend on the band's pixels), so a window of whole
-    /// rows, such as a `--tile` strip, gets the whole render's bytes, its halo included.
+    /// rows, such as a `--tile` strip, gets the whole render's bytes, its halo included. (On
+    /// several threads the last bands come in column pieces, [`TAIL_PIECES`]: other packets,
+    /// the same samples, as `tests/threads.rs` checks.)
     pub fn region(&self) -> Window {
         let grown = grown(
             self.window,
@@ -170,6 +172,55 @@ impl SampleBlock {
             depth: vec![f32::INFINITY; aux],
             normal: vec![Vec3::ZERO; aux],
         }
+    }
+
+    /// The block that column pieces of one band make side by side: `pieces` (in any order) are
+    /// blocks of the same rows, image and samples per pixel whose columns follow one another
+    /// without gap or overlap. The result is the block [`SampleBlock::new`] makes for all their
+    /// columns, with every sample as its piece holds it.
+    pub fn join_columns(mut pieces: Vec<SampleBlock>) -> SampleBlock {
+        pieces.sort_by_key(|p| p.x0);
+        let first = &pieces[0];
+        let (y0, rows, spp) = (first.y0, first.rows, first.spp as usize);
+        let mut x1 = first.x0;
+        for p in &pieces {
+            assert!(
+                p.x0 == x1 && p.y0 == y0 && p.rows == rows && p.spp == first.spp,
+                "column pieces of one band"
+            );
+            x1 += p.width;
+        }
+        let width = x1 - first.x0;
+        let pixels = width as usize * rows as usize;
+        let aux = if first.depth.is_empty() { 0 } else { pixels };
+        let mut joined = SampleBlock {
+            x0: first.x0,
+            y0,
+            width,
+            rows,
+            image_width: first.image_width,
+            image_height: first.image_height,
+            spp: first.spp,
+            offsets: Vec::with_capacity(pixels * spp),
+            nearest: Vec::with_capacity(pixels),
+            color: Vec::with_capacity(pixels * spp),
+            depth: Vec::with_capacity(aux),
+            normal: Vec::with_capacity(aux),
+        };
+        for r in 0..rows as usize {
+            for p in &pieces {
+                let w = p.width as usize;
+                let (px, slots) = (r * w..(r + 1) * w, r * w * spp..(r + 1) * w * spp);
+                joined.offsets.extend_from_slice(&p.offsets[slots.clone()]);
+                joined.color.extend_from_slice(&p.color[slots]);
+                joined.nearest.extend_from_slice(&p.nearest[px.clone()]);
+                if aux > 0 {
+                    joined.depth.extend_from_slice(&p.depth[px.clone()]);
+                    joined.normal.extend_from_slice(&p.normal[px]);
+                }
+            }
+        }
+        joined
     }
 
     /// The number of samples.

@@ -3,10 +3,13 @@
 //! lies); worker threads take bands in order, trace each with the tracer's closure, and the
 //! thread that completes the last band an output band's filter support needs filters it at
 //! once. A band's samples are freed when every output band that reads them is done, so the
-//! samples held stay a few bands per thread, whatever the image size.
+//! samples held stay a few bands per thread, whatever the image size. When several threads
+//! render, the last band of each is traced in [`TAIL_PIECES`] column pieces, joined once all
+//! are in, so that the threads finish close together.
 //!
 //! ```text
-//! worker: k = next band --trace--> samples k --> output bands m whose bands lo(m)..=hi(m) are all in:
+//! worker: k = next band (or piece, joined to its band when the last piece is in) --trace--> samples k
+//!         --> output bands m whose bands lo(m)..=hi(m) are all in:
 //!         filter m --> its rows of the output --> progress(those rows, final pixels and all);
 //!         free the bands no unfiltered output band needs
 //! ```
@@ -15,12 +18,13 @@
 //! makes its 8-bit images from them while the render runs (`output::StreamedImage`).
 //!
 //! The bytes do not depend on the thread count or on which thread did what: a band's samples
-//! are a function of the band, and an output pixel a function of the samples (one fixed
-//! summation order, [`super::filter_rows`]).
+//! are a function of the band (each sample's of its pixel and index alone, so a band joined
+//! from pieces holds what the whole band would), and an output pixel a function of the samples
+//! (one fixed summation order, [`super::filter_rows`]).
 
 use std::collections::BTreeMap;
 use std::ops::Range;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
 use super::{FilmSpec, SampleBlock, SampleRows, filter_rows};
@@ -31,6 +35,13 @@ use crate::options::{FinishedRows, Progress, RowPixels, Window};
 
 /// Rows per band of samples: the unit of parallel work and of streaming.
 pub const BAND_ROWS: u32 = 8;
+
+/// Column pieces each of the last bands is traced in when several threads render (the last
+/// band of each thread; none on one thread). Whole, the last band kept one thread waiting for
+/// the other's for about half a band: 0.64–0.84 ms of the course bunny's 2-thread frame, whose
+/// bands take 1.8 ms; in 4 pieces 0.31 ms, in 8 no less (PERF.md, sitting 57). A piece starts
+/// at a multiple of 4 columns, where the packet tracer's 4x2 tiles start.
+pub const TAIL_PIECES: u32 = 4;
 
 /// The pixels of the window, rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
@@ -107,6 +118,46 @@ impl Plan {
         top / BAND_ROWS..bottom / BAND_ROWS + 1
     }
 
+    /// The work of the frame in the order the workers take it: the bands top to bottom, whole
+    /// but for the last `threads` of them when `threads` > 1, each of which comes as its column
+    /// pieces, left to right.
+    fn work(&self, threads: usize) -> Vec<Work> {
+        let (x0, width) = (self.region.x0, self.region.width());
+        let split_from = match threads {
+            0 | 1 => self.last + 1,
+            n => self.last.saturating_sub(n as u32 - 1).max(self.first),
+        };
+        let piece = width.div_ceil(TAIL_PIECES).next_multiple_of(4);
+        let mut work = Vec::new();
+        for band in self.first..=self.last {
+            let of = if band < split_from {
+                1
+            } else {
+                width.div_ceil(piece)
+            };
+            if of == 1 {
+                work.push(Work {
+                    band,
+                    x0,
+                    width,
+                    of,
+                });
+                continue;
+            }
+            for p in 0..of {
+                let c = p * piece;
+                let width = piece.min(width - c);
+                work.push(Work {
+                    band,
+                    x0: x0 + c,
+                    width,
+                    of,
+                });
+            }
+        }
+        work
+    }
+
     /// The output bands that read sample band `k`.
     fn readers(&self, k: u32) -> impl Iterator<Item = u32> + '_ {
         let reach = self.r / BAND_ROWS + 1;
@@ -116,23 +167,37 @@ impl Plan {
     }
 }
 
+/// One unit of the workers' work: columns `x0..x0 + width` of the sample region's rows of
+/// band `band`, one of the `of` pieces of the band (1: the whole band).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Work {
+    band: u32,
+    x0: u32,
+    width: u32,
+    of: u32,
+}
+
 /// What the workers share.
 struct Shared<'o, T> {
     /// Traced sample bands still needed.
     bands: BTreeMap<u32, Arc<SampleBlock>>,
+    /// The pieces traced so far of bands that come in pieces, by band.
+    pieces: BTreeMap<u32, Vec<SampleBlock>>,
     /// Output bands (by `m - out_first`) not yet claimed, and their rows of the output.
     outputs: Vec<Option<OutRows<'o>>>,
     /// Output bands filtered.
     filtered: Vec<bool>,
-    /// What each sample band's trace returned (by `k - first`).
+    /// What each unit of work's trace returned (by its place in the work).
     results: Vec<Option<T>>,
     error: Option<crate::error::Error>,
 }
 
 /// Renders the window of `spec`: `trace` fills the colours (and, when kept, depths and
-/// normals) of each band's [`SampleBlock`], with per-thread state made by `init`; the film
-/// filters them. Returns the output and what `trace` returned for each band, in band order.
-/// Runs on the current rayon pool, one worker per thread.
+/// normals) of each band's [`SampleBlock`] (or of each column piece of one), with per-thread
+/// state made by `init`; the film filters them. Returns the output and what `trace` returned
+/// for each block it was handed, bands in order, a band's pieces left to right. Runs on the
+/// current rayon pool, one worker per thread; the pieces depend on that pool's size, the
+/// output does not.
 pub fn render_film<S, T, I, F>(
     spec: &FilmSpec,
     progress: Progress,
@@ -160,27 +225,35 @@ where
         samples: filled(kept, Vec3::ZERO),
     };
     let outputs = split_rows(&plan, &mut out, ww, spp);
+    let work = plan.work(rayon::current_num_threads());
     let shared = Mutex::new(Shared {
         bands: BTreeMap::new(),
+        pieces: BTreeMap::new(),
         filtered: vec![false; outputs.len()],
         outputs,
-        results: (plan.first..=plan.last).map(|_| None).collect(),
+        results: work.iter().map(|_| None).collect(),
         error: None,
     });
-    let next = AtomicU32::new(plan.first);
+    let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let worker = || {
         let mut state = init();
         while !stop.load(Ordering::Relaxed) {
-            let k = next.fetch_add(1, Ordering::Relaxed);
-            if k > plan.last {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            let Some(&Work {
+                band: k,
+                x0,
+                width,
+                of,
+            }) = work.get(i)
+            else {
                 break;
-            }
+            };
             let rows = plan.sample_rows(k);
             let mut block = SampleBlock::new(
-                plan.region.x0,
+                x0,
                 rows.start,
-                plan.region.width(),
+                width,
                 rows.end - rows.start,
                 spec.image_width,
                 spec.image_height,
@@ -191,13 +264,24 @@ where
             let ready = {
                 let mut sh = shared.lock().unwrap_or_else(PoisonError::into_inner);
                 match traced {
-                    Ok(t) => sh.results[(k - plan.first) as usize] = Some(t),
+                    Ok(t) => sh.results[i] = Some(t),
                     Err(e) => {
                         sh.error.get_or_insert(e);
                         stop.store(true, Ordering::Relaxed);
                         break;
                     }
                 }
+                let block = if of == 1 {
+                    block
+                } else {
+                    let pieces = sh.pieces.entry(k).or_default();
+                    pieces.push(block);
+                    if pieces.len() < of as usize {
+                        continue;
+                    }
+                    let pieces = sh.pieces.remove(&k).expect("the band's pieces");
+                    SampleBlock::join_columns(pieces)
+                };
                 sh.bands.insert(k, Arc::new(block));
                 claim_ready(&plan, &mut sh, k)
             };
@@ -232,7 +316,7 @@ where
     let results = sh
         .results
         .into_iter()
-        .map(|t| t.expect("every band was traced"))
+        .map(|t| t.expect("every block was traced"))
         .collect();
     Ok((out, results))
 }
