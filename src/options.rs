@@ -176,6 +176,11 @@ pub struct RenderOptions {
     pub depth_normal: bool,
     /// Keep every sample's colour in the frame (for the `-render_samples` picture).
     pub keep_samples: bool,
+    /// Keep every pixel in the frame (the default). Without, the frame holds no colour, depth
+    /// or normals, and the render no memory for them: for a caller whose images are all made
+    /// from the rows its progress hook sees (the command line's images written while
+    /// rendering).
+    pub keep_pixels: bool,
     pub tracer: Tracer,
     /// Worker threads; 0 means all cores.
     pub threads: usize,
@@ -202,6 +207,7 @@ impl Default for RenderOptions {
             filter: Filter::default(),
             depth_normal: true,
             keep_samples: false,
+            keep_pixels: true,
             tracer: Tracer::Packet,
             threads: 0,
             max_pixels: DEFAULT_MAX_PIXELS,

@@ -5,7 +5,8 @@
 //! 1-sample image; a pixel whose weights are all zero is black; the depth and normal images
 //! show the sample nearest the pixel centre; a band's samples lie where the sampler puts each
 //! pixel's own; column pieces of a band join into the band's block, and on several threads the
-//! last band of each thread comes in such pieces without changing a pixel.
+//! last band of each thread comes in such pieces without changing a pixel; a render that keeps
+//! no pixels shows its progress hook every pixel, depth and normal a kept frame holds.
 
 mod common;
 
@@ -37,6 +38,24 @@ fn sampler(pattern: Pattern, count: u32) -> Sampler {
 
 fn filter(shape: Shape, size: f32) -> Filter {
     Filter { shape, size }
+}
+
+/// A `width` x `height` render on 2 threads through `s` and `f`, with shadows and 3 bounces.
+fn small_render(width: u32, height: u32, s: Sampler, f: Filter, tracer: Tracer) -> RenderOptions {
+    RenderOptions {
+        width,
+        height,
+        sampler: s,
+        filter: f,
+        tracer,
+        threads: 2,
+        shade: ShadeOptions {
+            shadows: true,
+            bounces: 3,
+            ..ShadeOptions::default()
+        },
+        ..RenderOptions::default()
+    }
 }
 
 /// Pixel `(i, j)` computed from all of `frame`'s kept samples at once, straight from the
@@ -115,19 +134,8 @@ fn the_streamed_film_equals_the_whole_film() {
     for (w, h, s, f) in cases {
         for tracer in [Tracer::Packet, Tracer::Reference] {
             let opts = RenderOptions {
-                width: w,
-                height: h,
-                sampler: s,
-                filter: f,
                 keep_samples: true,
-                tracer,
-                threads: 2,
-                shade: ShadeOptions {
-                    shadows: true,
-                    bounces: 3,
-                    ..ShadeOptions::default()
-                },
-                ..RenderOptions::default()
+                ..small_render(w, h, s, f, tracer)
             };
             let frame = whitted::render(&scene, &opts).unwrap();
             assert_eq!(frame.samples.len(), (w * h * s.count) as usize);
@@ -370,5 +378,51 @@ fn the_last_band_of_each_thread_comes_in_column_pieces_and_no_pixel_changes() {
         }
         assert_eq!(TAIL_PIECES, 4);
         assert_eq!(blocks, want, "{threads} threads");
+    }
+}
+
+#[test]
+fn without_its_pixels_kept_the_frame_shows_the_hook_every_pixel_it_would_hold() {
+    use std::sync::Mutex;
+    use whitted::render::render_with_progress;
+    let scene = scene("showcase.txt");
+    for tracer in [Tracer::Packet, Tracer::Reference] {
+        let opts = RenderOptions {
+            depth_normal: true,
+            ..small_render(
+                41,
+                29,
+                sampler(Pattern::Jittered, 4),
+                filter(Shape::Gaussian, 2.3),
+                tracer,
+            )
+        };
+        let kept = whitted::render(&scene, &opts).unwrap();
+        let n = kept.color.len();
+        let seen = Mutex::new((vec![Vec3::NAN; n], vec![f32::NAN; n], vec![Vec3::NAN; n]));
+        let frame = render_with_progress(
+            &scene,
+            &RenderOptions {
+                keep_pixels: false,
+                ..opts.clone()
+            },
+            &|rows| {
+                let px = rows.pixels.as_ref().expect("the rows' pixels");
+                let span = px.rows.start as usize * 41..px.rows.end as usize * 41;
+                let mut seen = seen.lock().unwrap();
+                seen.0[span.clone()].copy_from_slice(px.color);
+                seen.1[span.clone()].copy_from_slice(px.depth);
+                seen.2[span].copy_from_slice(px.normal);
+            },
+        )
+        .unwrap();
+        assert!(frame.color.is_empty() && frame.depth.is_empty() && frame.normal.is_empty());
+        assert_eq!(frame.rays, kept.rays, "{tracer:?}");
+        let (color, depth, normal) = seen.into_inner().unwrap();
+        assert!(color == kept.color, "{tracer:?}: colour");
+        // Depths of misses are +inf; compare the bits.
+        let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert!(bits(&depth) == bits(&kept.depth), "{tracer:?}: depth");
+        assert!(normal == kept.normal, "{tracer:?}: normals");
     }
 }

@@ -55,6 +55,9 @@ pub struct FilmSpec {
     pub depth_normal: bool,
     /// Keep every sample's colour (for `-render_samples`).
     pub keep_samples: bool,
+    /// Keep every output pixel (colour, and depth and normal when kept) in the [`FilmOutput`].
+    /// Without, a band's pixels live only while the progress hook sees them.
+    pub keep_pixels: bool,
 }
 
 impl FilmSpec {
@@ -68,6 +71,7 @@ impl FilmSpec {
             filter: opts.filter,
             depth_normal: opts.depth_normal,
             keep_samples: opts.keep_samples,
+            keep_pixels: opts.keep_pixels,
         }
     }
 

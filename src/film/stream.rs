@@ -50,12 +50,13 @@ pub struct FilmOutput {
     pub window: Window,
     pub image_width: u32,
     pub image_height: u32,
-    /// Linear RGB per pixel, filtered.
+    /// Linear RGB per pixel, filtered; empty when the film keeps no pixels
+    /// ([`FilmSpec::keep_pixels`]).
     pub color: Vec<Vec3>,
     /// Per pixel, the distance to the hit of its sample nearest the centre (`+inf` for none);
-    /// empty unless asked for.
+    /// empty unless asked for (and pixels kept).
     pub depth: Vec<f32>,
-    /// Per pixel, the unit normal at that hit (zero for none); empty unless asked for.
+    /// Per pixel, the unit normal at that hit (zero for none); empty like `depth`.
     pub normal: Vec<Vec3>,
     /// Every sample's colour, pixel by pixel (`spp` each, in sample order); empty unless asked.
     pub samples: Vec<Vec3>,
@@ -213,13 +214,14 @@ where
     let w = spec.window;
     let (ww, spp) = (w.width() as usize, spec.sampler.count as usize);
     let pixels = w.pixels() as usize;
-    let aux = if spec.depth_normal { pixels } else { 0 };
+    let kept_pixels = if spec.keep_pixels { pixels } else { 0 };
+    let aux = if spec.depth_normal { kept_pixels } else { 0 };
     let kept = if spec.keep_samples { pixels * spp } else { 0 };
     let mut out = FilmOutput {
         window: w,
         image_width: spec.image_width,
         image_height: spec.image_height,
-        color: filled(pixels, Vec3::ZERO),
+        color: filled(kept_pixels, Vec3::ZERO),
         depth: filled(aux, f32::INFINITY),
         normal: filled(aux, Vec3::ZERO),
         samples: filled(kept, Vec3::ZERO),
@@ -285,7 +287,23 @@ where
                 sh.bands.insert(k, Arc::new(block));
                 claim_ready(&plan, &mut sh, k)
             };
-            for (m, bands, mut rows) in ready {
+            for (m, bands, rows) in ready {
+                // Without the frame's pixels, the output band's own, for the hook to see.
+                let (mut color, mut depth, mut normal);
+                let mut rows = if spec.keep_pixels {
+                    rows
+                } else {
+                    let n = plan.output_rows(m).len() * ww;
+                    let aux = if spec.depth_normal { n } else { 0 };
+                    (color, depth, normal) =
+                        (vec![Vec3::ZERO; n], vec![0.0; aux], vec![Vec3::ZERO; aux]);
+                    OutRows {
+                        color: &mut color,
+                        depth: &mut depth,
+                        normal: &mut normal,
+                        samples: rows.samples,
+                    }
+                };
                 filter_band(&plan, m, &bands, &mut rows);
                 let out_rows = plan.output_rows(m);
                 let y0 = spec.window.y0;
@@ -328,7 +346,11 @@ fn split_rows<'o>(
     ww: usize,
     spp: usize,
 ) -> Vec<Option<OutRows<'o>>> {
-    let (aux, kept) = (!out.depth.is_empty(), !out.samples.is_empty());
+    let (pixels, aux, kept) = (
+        !out.color.is_empty(),
+        !out.depth.is_empty(),
+        !out.samples.is_empty(),
+    );
     let mut color = out.color.as_mut_slice();
     let mut depth = out.depth.as_mut_slice();
     let mut normal = out.normal.as_mut_slice();
@@ -338,7 +360,7 @@ fn split_rows<'o>(
         let n = plan.output_rows(m).len() * ww;
         let (a, k) = (if aux { n } else { 0 }, if kept { n * spp } else { 0 });
         let c;
-        (c, color) = std::mem::take(&mut color).split_at_mut(n);
+        (c, color) = std::mem::take(&mut color).split_at_mut(if pixels { n } else { 0 });
         let d;
         (d, depth) = std::mem::take(&mut depth).split_at_mut(a);
         let nm;

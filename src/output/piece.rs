@@ -191,6 +191,7 @@ fn hash_render(scene: &Scene, opts: &RenderOptions) -> Fnv1a {
             max_filter_radius: 0,
             depth_normal: false,
             keep_samples: false,
+            keep_pixels: true,
             ..opts.clone()
         };
         let mut h = Fnv1a::new();
