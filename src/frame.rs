@@ -21,12 +21,14 @@ pub struct Frame {
     /// The full image's size.
     pub image_width: u32,
     pub image_height: u32,
-    /// Linear RGB per pixel (filtered from its samples).
+    /// Linear RGB per pixel (filtered from its samples). Empty when the render was asked to
+    /// keep no pixels ([`RenderOptions::keep_pixels`](crate::RenderOptions::keep_pixels)): its
+    /// progress hook saw them.
     pub color: Vec<Vec3>,
     /// Distance along the primary ray to the first hit; `+inf` where nothing was hit. With
     /// several samples per pixel, the ray of the sample nearest the pixel centre. Empty when
     /// the render was asked not to keep depth and normals
-    /// ([`RenderOptions::depth_normal`](crate::RenderOptions::depth_normal)).
+    /// ([`RenderOptions::depth_normal`](crate::RenderOptions::depth_normal)) or no pixels.
     pub depth: Vec<f32>,
     /// Unit world normal of the first hit; zero where nothing was hit. The same sample as the
     /// depth; empty like it.
