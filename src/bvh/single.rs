@@ -775,7 +775,7 @@ fn sort_keys_descending(k: &mut [u64]) {
 mod tests {
     use super::{PlaneBases, Ray1, Ray1x8};
     use crate::bvh::build::{BuildSettings, LeafSink, build};
-    use crate::bvh::{Aabb, Node8, NodeRef, WIDTH};
+    use crate::bvh::{Aabb, HI, LO, Node8, NodeRef, WIDTH};
     use crate::math::{Ray, Vec3};
     use crate::packet::RayPacket;
     use crate::simd::F32x8;
@@ -836,12 +836,17 @@ mod tests {
 
     /// A packet's test of one child, each lane in its own octant, gives each lane's own
     /// single-ray test of that child bit for bit (mask and entry distance), for rays of every
-    /// octant mixed in one packet, boxes they start inside, and per-lane `tmin` and `tmax`; so
-    /// does its test of a whole node (the first step of the lanes' walks).
+    /// octant mixed in one packet, boxes they start inside, rays through a box's corner, and
+    /// per-lane `tmin` and `tmax`; so does its test of a whole node (the first step of the
+    /// lanes' walks).
     #[test]
     fn a_packet_child_test_is_each_lanes_single_ray_test() {
         let mut rng = Rng(0x51ed_2701);
         for case in 0..500 {
+            // In every fourth case, half the lanes aim at a corner of a box as the node
+            // stores it: where such a ray touches the box at the corner alone, it enters and
+            // leaves at one distance, and the exit's widening is what keeps the box entered.
+            let corners = case % 4 == 2;
             let boxes: [Aabb; WIDTH] = std::array::from_fn(|k| {
                 let a: [f32; 3] = std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32);
                 let mut b: [f32; 3] = std::array::from_fn(|_| rng.range64(-4.0, 4.0) as f32);
@@ -859,6 +864,17 @@ mod tests {
             let n = Node8::new(&boxes.map(|b| (NodeRef::EMPTY, b)));
             let rays: [Ray; 8] = std::array::from_fn(|l| {
                 let o = Vec3::from_array(std::array::from_fn(|_| rng.range64(-6.0, 6.0) as f32));
+                if corners && l % 2 == 0 {
+                    // the node's planes (its boxes padded outward), one of each axis's two
+                    let pick = (case / 4 + l) % 8;
+                    let corner = Vec3::from_array(std::array::from_fn(|a| {
+                        let plane = if pick >> a & 1 == 1 { HI + a } else { LO + a };
+                        n.bounds[plane].to_array()[l]
+                    }));
+                    let o = if l % 4 == 0 { Vec3::ZERO } else { o };
+                    let d = corner - o;
+                    return Ray::new(o, if d == Vec3::ZERO { Vec3::X } else { d });
+                }
                 let mut d: [f32; 3] = std::array::from_fn(|_| rng.range64(-1.0, 1.0) as f32);
                 if (case + l) % 6 == 0 {
                     d[l % 3] = 0.0;
@@ -886,6 +902,10 @@ mod tests {
                 for (l, ray) in rays.iter().enumerate() {
                     let (t0, t1) = (F32x8::splat(tmin[l]), F32x8::splat(tmax[l]));
                     let (m1, n1) = Ray1::new::<true>(ray).test::<true>(&n, t0, t1);
+                    // a ray from the origin through a stored corner meets that box at t = 1
+                    if corners && l % 4 == 0 && i == l && tmin[l] <= 1.0 && tmax[l] >= 1.0 {
+                        assert_eq!(m1 >> i & 1, 1, "case {case}, lane {l}: its corner's box");
+                    }
                     assert_eq!(
                         crate::simd::bitmask(mask) >> l & 1,
                         m1 >> i & 1,
