@@ -128,33 +128,18 @@ impl Plan {
             0 | 1 => self.last + 1,
             n => self.last.saturating_sub(n as u32 - 1).max(self.first),
         };
-        let piece = width.div_ceil(TAIL_PIECES).next_multiple_of(4);
+        let tail_piece = width.div_ceil(TAIL_PIECES).next_multiple_of(4);
         let mut work = Vec::new();
         for band in self.first..=self.last {
-            let of = if band < split_from {
-                1
-            } else {
-                width.div_ceil(piece)
-            };
-            if of == 1 {
-                work.push(Work {
-                    band,
-                    x0,
-                    width,
-                    of,
-                });
-                continue;
-            }
-            for p in 0..of {
-                let c = p * piece;
-                let width = piece.min(width - c);
-                work.push(Work {
-                    band,
-                    x0: x0 + c,
-                    width,
-                    of,
-                });
-            }
+            // a whole band is its one piece
+            let piece = if band < split_from { width } else { tail_piece };
+            let of = width.div_ceil(piece);
+            work.extend((0..of).map(|p| Work {
+                band,
+                x0: x0 + p * piece,
+                width: piece.min(width - p * piece),
+                of,
+            }));
         }
         work
     }
