@@ -16,7 +16,10 @@ write_ms` of `--stats`. ONLY=showcase or ONLY=bunny runs one of them.
 - `ceiling`: what the machine allows: each round runs a frame at 1 thread alone, then two
   1-thread processes of it at once; the ceiling is 2 x alone / the slower of the two (medians).
 - `phases`: the bunny alone, each phase of `--stats` at 1 and 2 threads (medians), and what 2
-  threads lose against half of 1 thread's time.
+  threads lose against half of 1 thread's time; then the tracing's CPU time (`bounce0_cpu_ms`)
+  at 2 threads and in each of two 1-thread processes run at once (each round also runs such a
+  pair), both against 1 thread alone: when the pair's is as high, the machine, not the
+  program, takes that time from a second thread.
 - `compare OTHER`: two binaries on the same frames, each round running both at 1 thread and
   then at 2 (which goes first alternates by round); prints each one's median and best and the
   median of the rounds' differences OTHER - WHITTED, with how often OTHER was faster.
@@ -70,19 +73,19 @@ def run(whitted, name, threads, out="f"):
 
 
 def pair(whitted, name):
-    """Two 1-thread processes of frame `name` at once; the slower's frame time."""
+    """Two 1-thread processes of frame `name` at once; the `--stats` of each."""
     procs = []
     for out in ("p", "q"):
         cmd, cwd = command(whitted, name, 1, out)
         procs.append(subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                       text=True, cwd=cwd))
-    times = []
+    found = []
     for p in procs:
         err = p.communicate()[1]
         if p.returncode != 0:
             sys.exit(err)
-        times.append(stats(err)["frame_ms"])
-    return max(times)
+        found.append(stats(err))
+    return found
 
 
 def compare(first, other, rounds, names):
@@ -122,10 +125,12 @@ def measure(whitted, rounds, names, mode):
         for n in names:
             if mode == "ceiling":
                 runs[n][1].append(run(whitted, n, 1)["frame_ms"])
-                runs[n][2].append(pair(whitted, n))
+                runs[n][2].append(max(r["frame_ms"] for r in pair(whitted, n)))
             else:
                 for t in (1, 2):
                     runs[n][t].append(run(whitted, n, t))
+                if mode == "phases":
+                    runs[n].setdefault("pair", []).extend(pair(whitted, n))
     end = time.strftime("%H:%M:%S", time.gmtime())
     return runs, start, end
 
@@ -158,6 +163,14 @@ def report(mode, rounds, names, runs, start, end):
                 a, b = med(r[k] for r in one), med(r[k] for r in two)
                 print(f"  {k:15s} 1 thread {a:8.2f}  2 threads {b:8.2f}  {a / b:.3f}x  "
                       f"lost against half: {b - a / 2:6.2f} ms")
+            # The tracing's CPU time of a 2-thread frame against two 1-thread frames at once:
+            # what the machine takes from a second thread whatever the program does.
+            k = "bounce0_cpu_ms"
+            a, b = med(r[k] for r in one), med(r[k] for r in two)
+            c = med(r[k] for r in runs[n]["pair"])
+            print(f"  {k} of a 1-thread frame alone {a:.2f}; of a 2-thread frame {b:.2f} "
+                  f"({b / a - 1:+.1%}); of each of two 1-thread frames at once {c:.2f} "
+                  f"({c / a - 1:+.1%})")
         else:
             a, b = [r["frame_ms"] for r in one], [r["frame_ms"] for r in two]
             medians, best, own = ratios(one, two)
