@@ -118,7 +118,8 @@ CEILING_ROUNDS = 10
 
 def measure(whitted, rounds, names, mode):
     """`rounds` rounds of `mode` (frames, ceiling or phases): the times per frame and thread
-    count (for `ceiling`, 1 is alone and 2 the slower of the pair), and the start and end."""
+    count (for `ceiling`, 1 is alone and 2 the slower of the pair; `phases` adds "pair", the
+    `--stats` of both processes of each round's pair), and the start and end."""
     runs = {n: {1: [], 2: []} for n in names}
     start = time.strftime("%H:%M:%S", time.gmtime())
     for _ in range(rounds):
@@ -164,7 +165,7 @@ def report(mode, rounds, names, runs, start, end):
                 print(f"  {k:15s} 1 thread {a:8.2f}  2 threads {b:8.2f}  {a / b:.3f}x  "
                       f"lost against half: {b - a / 2:6.2f} ms")
             # The tracing's CPU time of a 2-thread frame against two 1-thread frames at once:
-            # what the machine takes from a second thread whatever the program does.
+            # where the pair loses as much, the loss is the machine's, not the program's.
             k = "bounce0_cpu_ms"
             a, b = med(r[k] for r in one), med(r[k] for r in two)
             c = med(r[k] for r in runs[n]["pair"])
