@@ -21,7 +21,7 @@
 //! vertices and normals came before it, so reading takes two passes over the chunks:
 //!
 //! ```text
-//! bytes --split at line ends, UTF-8 checked--> chunks --pass 1 (parallel): v, vn, statement checks--> points
+//! bytes --split at line ends, UTF-8 checked--> chunks --pass 1 (parallel): v, vn, statement checks, f lines counted--> points
 //!      --prefix sums: first line, first vertex, first normal of each chunk
 //!      --pass 2 (parallel): f lines resolved against the points before them--> triangles
 //!      --concatenated in chunk order--> ObjMesh
@@ -139,7 +139,7 @@ fn parse_obj_in_chunks(bytes: &[u8], path: &Path, chunk_bytes: usize) -> Result<
             until => read_faces(
                 chunks[k],
                 until.flatten().unwrap_or(usize::MAX),
-                points[k].first_face,
+                (points[k].first_face, points[k].faces),
                 (first_vertex[k], first_normal[k]),
                 (&vertices, &vertex_normals),
             ),

@@ -1,9 +1,9 @@
 //! One line of an OBJ file at a time, for the two passes of the chunked reading in `obj.rs`:
-//! pass 1 reads a chunk's `v` and `vn` lines, checks every statement but faces and notes
-//! where its first `f` line is ([`read_points`]); pass 2 reads its `f` lines, from that one
-//! on, against the points before them ([`read_faces`]). A pass stops its chunk at the first
-//! fault, with its position in the chunk ([`Stop`]); `obj.rs` turns the first stop in file
-//! order into the file's error.
+//! pass 1 reads a chunk's `v` and `vn` lines, checks every statement but faces, notes where
+//! its first `f` line is and counts its `f` lines ([`read_points`]); pass 2 reads its `f`
+//! lines, from that one on, against the points before them, into room made for a triangle
+//! per line ([`read_faces`]). A pass stops its chunk at the first fault, with its position in
+//! the chunk ([`Stop`]); `obj.rs` turns the first stop in file order into the file's error.
 //!
 //! The lines mesh exporters write (`v x y z`, `vn x y z`, `f a b c` with plain or `a/t/n`
 //! corners) are read without splitting them into words first; any other line, and any of
@@ -11,7 +11,7 @@
 //! gives the same result and names the fault.
 //!
 //! ```text
-//! chunk --read_points--> Points { vertices, normals, lines, first face, stop }
+//! chunk --read_points--> Points { vertices, normals, lines, first face, faces, stop }
 //! chunk + all points --read_faces--> Faces { triangles, corner normals, stop }
 //! ```
 
@@ -65,6 +65,8 @@ pub(super) struct Points {
     pub(super) lines: usize,
     /// Where the chunk's first `f` line is, if pass 1 met one: pass 2 starts there.
     pub(super) first_face: Option<FirstFace>,
+    /// The chunk's `f` lines (before the stop, if any): pass 2 makes room for a triangle each.
+    pub(super) faces: usize,
     pub(super) stop: Option<Stop>,
 }
 
@@ -110,6 +112,7 @@ pub(super) fn read_points(chunk: &str) -> Points {
         let quick = match text.as_bytes() {
             [b'f', s, ..] if is_ascii_space(*s) => {
                 p.first_face = p.first_face.or_else(|| Some(face_here(&p)));
+                p.faces += 1;
                 continue;
             }
             [b'v', s, ..] if is_ascii_space(*s) => {
@@ -144,6 +147,7 @@ pub(super) fn read_points(chunk: &str) -> Points {
             }),
             "f" => {
                 p.first_face = p.first_face.or_else(|| Some(face_here(&p)));
+                p.faces += 1;
                 Ok(())
             }
             "vt" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => Ok(()),
@@ -173,13 +177,16 @@ pub(super) fn stop_at(line: usize, fault: Option<(usize, String)>) -> Stop {
 }
 
 /// Pass 2 over a chunk's lines before `until`, from its first face on (`from`, found by pass
-/// 1; none: nothing to read): its faces, as triangles. `before` counts the vertices and
-/// normals of the earlier chunks, `points` holds all those read (a face may name only the ones
-/// before it).
+/// 1; none: nothing to read): its faces, as triangles. `faces` is pass 1's count of the chunk's
+/// `f` lines: room for that many triangles is made first, so that the list of a triangulated
+/// mesh's chunk never grows (growing copies it, inside the lock of the one heap the workers
+/// share: torus1m's parse at 2 threads took 8–14 ms longer so, PERF.md sitting 58). `before`
+/// counts the vertices and normals of the earlier chunks, `points` holds all those read (a
+/// face may name only the ones before it).
 pub(super) fn read_faces(
     chunk: &str,
     until: usize,
-    from: Option<FirstFace>,
+    (from, faces): (Option<FirstFace>, usize),
     before: (usize, usize),
     (vertices, normals): (&[Vec3], &[Vec3]),
 ) -> Faces {
@@ -187,6 +194,8 @@ pub(super) fn read_faces(
     let Some(from) = from else {
         return out;
     };
+    // No room is no error yet: the first triangle that finds none stops the chunk.
+    let _ = out.triangles.try_reserve_exact(faces);
     let (mut nv, mut nn) = (before.0 + from.vertices, before.1 + from.normals);
     let mut corners: Vec<(usize, Option<usize>)> = Vec::new();
     let lines = lines(&chunk[from.byte..])
@@ -375,9 +384,13 @@ pub(super) fn add_fan(
             )));
         }
         if smooth && !out.smooth {
-            // The chunk's first smooth face: the flat triangles before it get their corners.
+            // The chunk's first smooth face: the flat triangles before it get their corners,
+            // and the normals as much room as the triangles.
             out.smooth = true;
             out.normals = try_collect(out.triangles.iter().map(flat_corners)).ok_or(None)?;
+            let _ = out
+                .normals
+                .try_reserve_exact(out.triangles.capacity() - out.normals.len());
         }
         push(&mut out.triangles, tri).ok_or(None)?;
         if out.smooth {
@@ -641,6 +654,39 @@ mod tests {
             words_with_columns("f\t1 22").collect::<Vec<_>>(),
             [(1, "f"), (3, "1"), (5, "22")]
         );
+    }
+
+    /// Pass 1 counts every `f` line, read the quick way or the general one, and pass 2 makes
+    /// room for that many triangles first: a triangulated chunk's list is never grown, and
+    /// once a chunk turns smooth its normals get as much room as its triangles.
+    #[test]
+    fn pass_2_makes_room_for_a_triangle_per_face_line_that_pass_1_counted() {
+        let read = |chunk: &str| {
+            let p = read_points(chunk);
+            let faces = (p.first_face, p.faces);
+            (
+                p.faces,
+                read_faces(chunk, usize::MAX, faces, (0, 0), (&p.vertices, &p.normals)),
+            )
+        };
+        let flat =
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\n  f 1 2 4\nf\t1 3 4\nvn 0 0 1\nf 2 3 4\n";
+        let (counted, faces) = read(flat);
+        assert_eq!(counted, 4);
+        assert!(faces.stop.is_none());
+        assert_eq!(faces.triangles.len(), 4);
+        assert_eq!(faces.triangles.capacity(), 4, "the triangles' list grew");
+        let smooth =
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1 2 3\nf 1//1 2//1 3//1\n f 3//1 2//1 1//1\n";
+        let (counted, faces) = read(smooth);
+        assert_eq!(counted, 3);
+        assert!(faces.smooth && faces.stop.is_none());
+        assert_eq!((faces.triangles.len(), faces.normals.len()), (3, 3));
+        assert_eq!(faces.triangles.capacity(), 3, "the triangles' list grew");
+        assert_eq!(faces.normals.capacity(), 3, "the normals' list grew");
+        // A fan makes more triangles than lines: its list grows, as before.
+        let (counted, faces) = read("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+        assert_eq!((counted, faces.triangles.len()), (1, 2));
     }
 
     #[test]
