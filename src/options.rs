@@ -315,6 +315,11 @@ pub fn check_options(opts: &RenderOptions) -> Result<()> {
     }
     check_sampling(opts)?;
     // Probe for the frame's memory so a size that cannot be allocated is an error, not an abort.
+    // A side effect to keep in mind: under the binary's allocator (`hugepages.rs`) a probe of 4
+    // MiB or more is advised for huge pages, and once freed its memory is where malloc puts the
+    // next blocks (the scene's loading, the BVH build's), which so get huge pages too. Probed
+    // without the advice, the course bunny's 800x800 parse took 1.38 ms more at 1 thread and
+    // 0.63 ms more at 2 (PERF.md, sitting 59).
     let bytes = memory_bytes(opts);
     let fits = usize::try_from(bytes).is_ok_and(|b| Vec::<u8>::new().try_reserve_exact(b).is_ok());
     if !fits {
