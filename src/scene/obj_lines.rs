@@ -102,17 +102,22 @@ pub(super) fn read_points(chunk: &str) -> Points {
     let mut p = Points::default();
     for (line, text) in lines(chunk).enumerate() {
         p.lines = line + 1;
-        // The common lines the quick way (see the module's notes), the rest the general way.
-        let face_here = |p: &Points| FirstFace {
-            byte: text.as_ptr() as usize - chunk.as_ptr() as usize,
-            line,
-            vertices: p.vertices.len(),
-            normals: p.normals.len(),
+        // An `f` line, however read: counted, and where the first one is noted.
+        let note_face = |p: &mut Points| {
+            if p.first_face.is_none() {
+                p.first_face = Some(FirstFace {
+                    byte: text.as_ptr() as usize - chunk.as_ptr() as usize,
+                    line,
+                    vertices: p.vertices.len(),
+                    normals: p.normals.len(),
+                });
+            }
+            p.faces += 1;
         };
+        // The common lines the quick way (see the module's notes), the rest the general way.
         let quick = match text.as_bytes() {
             [b'f', s, ..] if is_ascii_space(*s) => {
-                p.first_face = p.first_face.or_else(|| Some(face_here(&p)));
-                p.faces += 1;
+                note_face(&mut p);
                 continue;
             }
             [b'v', s, ..] if is_ascii_space(*s) => {
@@ -146,8 +151,7 @@ pub(super) fn read_points(chunk: &str) -> Points {
                 ))),
             }),
             "f" => {
-                p.first_face = p.first_face.or_else(|| Some(face_here(&p)));
-                p.faces += 1;
+                note_face(&mut p);
                 Ok(())
             }
             "vt" | "vp" | "o" | "g" | "s" | "usemtl" | "mtllib" | "l" | "p" => Ok(()),
